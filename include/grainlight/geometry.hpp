@@ -1,0 +1,11 @@
+/// @file grainlight/geometry.hpp
+/// Umbrella header of the geometry layer: boxes, transforms, spheres, triangle meshes, the BVH
+/// and procedural grains.
+#pragma once
+
+#include "grainlight/geometry/aabb.hpp"
+#include "grainlight/geometry/bvh.hpp"
+#include "grainlight/geometry/grains.hpp"
+#include "grainlight/geometry/sphere.hpp"
+#include "grainlight/geometry/transform.hpp"
+#include "grainlight/geometry/triangle_mesh.hpp"

@@ -1,0 +1,286 @@
+/// @file grainlight/geometry/grains.hpp
+/// Procedural grain meshes and grain materials for the virtual scatterometer (Meng15 Sec. 4.2)
+/// and for explicit path tracing of grains (Meng15 Sec. 3.2).
+///
+/// Every procedural grain is star-shaped around the origin: it is a subdivided icosahedron whose
+/// vertices are pushed to the radius r(w) of a shape function, so the mesh is watertight and
+/// consistently oriented by construction. It is then scaled so that its bounding sphere centred at
+/// the origin (the largest vertex distance) has exactly the requested radius R. In a packing the
+/// bounding sphere has radius 1 and R <= 1 (a grain larger than its bounding sphere is an error).
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "grainlight/core/error.hpp"
+#include "grainlight/core/math.hpp"
+#include "grainlight/core/rng.hpp"
+#include "grainlight/core/spectrum.hpp"
+#include "grainlight/core/vector.hpp"
+#include "grainlight/geometry/triangle_mesh.hpp"
+
+namespace grainlight {
+
+/// Procedural grain shapes.
+enum class GrainShape {
+    sphere,   ///< a sphere (the scatterometer intersects it analytically; the mesh is for renderers)
+    snow,     ///< bumpy, irregular rounded grain: sum of random Gaussian lobes on a sphere
+    crystal,  ///< rounded cube (superquadric |x|^p + |y|^p + |z|^p = 1, p = 6) with slightly jittered faces: salt/sugar
+    rice,     ///< prolate ellipsoid, axes 1 : 0.38 : 0.34, slightly bent
+    flake     ///< flat oblate, irregular-outline flake, axes 1 : 0.9 : 0.18
+};
+
+/// Name <-> enum ("sphere", "snow", "crystal", "rice", "flake").
+[[nodiscard]] inline std::string_view to_string(GrainShape s) noexcept {
+    switch (s) {
+        case GrainShape::sphere: return "sphere";
+        case GrainShape::snow: return "snow";
+        case GrainShape::crystal: return "crystal";
+        case GrainShape::rice: return "rice";
+        case GrainShape::flake: return "flake";
+    }
+    return "?";
+}
+/// Throws grainlight::invalid_argument for an unknown name.
+[[nodiscard]] inline GrainShape grain_shape_from_string(std::string_view name) {
+    for (GrainShape s : {GrainShape::sphere, GrainShape::snow, GrainShape::crystal, GrainShape::rice, GrainShape::flake})
+        if (to_string(s) == name) return s;
+    raise_invalid_argument("grain_shape_from_string", "shape", std::string(name), "sphere|snow|crystal|rice|flake");
+}
+
+/// Unit icosphere: the icosahedron subdivided `level` times (20 * 4^level triangles), vertices
+/// on the unit sphere, outward-facing counter-clockwise triangles, shared vertices (watertight).
+template <std::floating_point F = float>
+[[nodiscard]] inline TriangleMesh<F> make_icosphere(int level) {
+    check_argument(level >= 0 && level <= 8, "make_icosphere", "level", level, "[0, 8]");
+    TriangleMesh<double> m;
+    const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+    const double vs[12][3] = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                              {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+    for (auto& v : vs) m.vertices.push_back(glm::normalize(Vec3d(v[0], v[1], v[2])));
+    m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                   {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                   {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+    for (int l = 0; l < level; ++l) {
+        std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> mid;
+        auto midpoint = [&](std::uint32_t a, std::uint32_t b) {
+            const auto key = std::minmax(a, b);
+            auto it = mid.find(key);
+            if (it != mid.end()) return it->second;
+            const auto id = std::uint32_t(m.vertices.size());
+            m.vertices.push_back(glm::normalize(m.vertices[a] + m.vertices[b]));
+            mid.emplace(key, id);
+            return id;
+        };
+        std::vector<std::array<std::uint32_t, 3>> next;
+        next.reserve(m.triangles.size() * 4);
+        for (const auto& tri : m.triangles) {
+            const std::uint32_t a = midpoint(tri[0], tri[1]), b = midpoint(tri[1], tri[2]), c = midpoint(tri[2], tri[0]);
+            next.push_back({tri[0], a, c});
+            next.push_back({tri[1], b, a});
+            next.push_back({tri[2], c, b});
+            next.push_back({a, b, c});
+        }
+        m.triangles = std::move(next);
+    }
+    TriangleMesh<F> out;
+    out.vertices.reserve(m.vertices.size());
+    for (const auto& v : m.vertices) out.vertices.emplace_back(Vec3<F>(v));
+    out.triangles = std::move(m.triangles);
+    out.compute_face_normals();
+    return out;
+}
+
+namespace detail {
+
+/// Radius of the (unscaled) grain surface in unit direction w; shapes are star-shaped.
+struct GrainRadiusFunction {
+    GrainShape shape = GrainShape::sphere;
+    // snow: Gaussian lobes (direction, amplitude, angular width)
+    std::vector<std::array<double, 5>> lobes;
+    // crystal: jitter of the six face distances; rice/flake: axes and outline wobble
+    std::array<double, 6> face{1, 1, 1, 1, 1, 1};
+    std::array<double, 4> wobble{0, 0, 0, 0};
+
+    [[nodiscard]] double operator()(const Vec3d& w) const noexcept {
+        switch (shape) {
+            case GrainShape::sphere: return 1.0;
+            case GrainShape::snow: {
+                double r = 1.0;
+                for (const auto& l : lobes) {
+                    const double c = w.x * l[0] + w.y * l[1] + w.z * l[2];
+                    r += l[3] * std::exp((c - 1.0) / l[4]);
+                }
+                return r;
+            }
+            case GrainShape::crystal: {
+                // Superquadric with per-face half-widths: r = (sum |w_i / a_i|^p)^(-1/p).
+                const double p = 6.0;
+                const double ax = w.x >= 0 ? face[0] : face[1], ay = w.y >= 0 ? face[2] : face[3],
+                             az = w.z >= 0 ? face[4] : face[5];
+                const double s = std::pow(std::abs(w.x / ax), p) + std::pow(std::abs(w.y / ay), p) +
+                                 std::pow(std::abs(w.z / az), p);
+                return std::pow(s, -1.0 / p);
+            }
+            case GrainShape::rice: {
+                const double a = 1.0, b = 0.38, c = 0.34;
+                // bend: the long axis curves slightly toward +y
+                const double wy = w.y - wobble[0] * (w.x * w.x);
+                return 1.0 / std::sqrt(sqr(w.x / a) + sqr(wy / b) + sqr(w.z / c));
+            }
+            case GrainShape::flake: {
+                const double phi = std::atan2(w.y, w.x);
+                const double outline =
+                    1.0 + wobble[0] * std::cos(3.0 * phi + wobble[1]) + wobble[2] * std::cos(5.0 * phi + wobble[3]);
+                const double a = outline, b = 0.9 * outline, c = 0.18;
+                return 1.0 / std::sqrt(sqr(w.x / a) + sqr(w.y / b) + sqr(w.z / c));
+            }
+        }
+        return 1.0;
+    }
+};
+
+inline GrainRadiusFunction make_radius_function(GrainShape shape, std::uint64_t seed) {
+    GrainRadiusFunction f;
+    f.shape = shape;
+    Pcg32 rng = Pcg32::from_key(seed, 0x67726169ull /* "grai" */, std::uint64_t(shape));
+    switch (shape) {
+        case GrainShape::sphere: break;
+        case GrainShape::snow: {
+            // 14 lobes of random height (+-) and width: a rounded, irregular, bumpy grain.
+            for (int i = 0; i < 14; ++i) {
+                const double z = 1.0 - 2.0 * rng.next_double(), ph = 2.0 * pi_v<double> * rng.next_double();
+                const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
+                const double amp = (i < 9 ? 0.35 : -0.18) * (0.4 + 0.6 * rng.next_double());
+                const double width = 0.05 + 0.12 * rng.next_double();
+                f.lobes.push_back({s * std::cos(ph), s * std::sin(ph), z, amp, width});
+            }
+            break;
+        }
+        case GrainShape::crystal:
+            for (auto& a : f.face) a = 0.9 + 0.2 * rng.next_double();
+            break;
+        case GrainShape::rice: f.wobble[0] = 0.1 + 0.1 * rng.next_double(); break;
+        case GrainShape::flake:
+            f.wobble = {0.06 + 0.06 * rng.next_double(), 2 * pi_v<double> * rng.next_double(),
+                        0.03 + 0.04 * rng.next_double(), 2 * pi_v<double> * rng.next_double()};
+            break;
+    }
+    return f;
+}
+
+}  // namespace detail
+
+/// Procedural grain mesh of the given shape, seed and icosphere subdivision level (20 * 4^level
+/// triangles; 5 gives 20480), scaled so its origin-centred bounding sphere has radius
+/// `bounding_radius` (> 0; <= 1 for use inside a packing's unit bounding sphere, which the
+/// scatterometer checks). Watertight with outward normals. The same (shape, seed, level) always
+/// gives the same mesh.
+template <std::floating_point F = float>
+[[nodiscard]] inline TriangleMesh<F> make_grain_mesh(GrainShape shape, F bounding_radius, std::uint64_t seed = 1,
+                                                     int level = 5) {
+    check_argument(bounding_radius > F(0) && std::isfinite(bounding_radius), "make_grain_mesh", "bounding_radius",
+                   bounding_radius, "(0, inf)");
+    const TriangleMesh<double> base = make_icosphere<double>(level);
+    const detail::GrainRadiusFunction radius = detail::make_radius_function(shape, seed);
+    std::vector<Vec3d> pts(base.vertices.size());
+    double rmax = 0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        pts[i] = base.vertices[i] * radius(base.vertices[i]);
+        rmax = std::max(rmax, glm::length(pts[i]));
+    }
+    TriangleMesh<F> mesh;
+    mesh.vertices.reserve(pts.size());
+    const double scale = double(bounding_radius) / rmax;
+    for (const auto& p : pts) mesh.vertices.emplace_back(Vec3<F>(p * scale));
+    mesh.triangles = base.triangles;
+    mesh.compute_face_normals();
+    mesh.validate("make_grain_mesh");
+    return mesh;
+}
+
+/// How light interacts with a grain (Meng15 Table 1's materials).
+enum class GrainMaterialKind {
+    dielectric,             ///< smooth lossless dielectric (glass beads, salt, sugar, snow/ice)
+    absorbing_dielectric,   ///< smooth dielectric enclosing a homogeneous absorbing/scattering medium (sand)
+    diffuse                 ///< opaque Lambertian surface (flour)
+};
+
+[[nodiscard]] inline std::string_view to_string(GrainMaterialKind k) noexcept {
+    switch (k) {
+        case GrainMaterialKind::dielectric: return "dielectric";
+        case GrainMaterialKind::absorbing_dielectric: return "absorbing-dielectric";
+        case GrainMaterialKind::diffuse: return "diffuse";
+    }
+    return "?";
+}
+
+/// Grain material, per RGB channel where it varies. Lengths (interior coefficients) are in units
+/// of the *bounding-sphere* radius (the scatterometer's unit), so sigma_a = 1 means one mean free
+/// path per bounding-sphere radius.
+struct GrainMaterial {
+    GrainMaterialKind kind = GrainMaterialKind::dielectric;
+    double ior = 1.5;                          ///< relative index of refraction (> 0, != 1 allowed)
+    RGBd interior_sigma_a{0.0, 0.0, 0.0};      ///< absorption coefficient inside (absorbing_dielectric)
+    RGBd interior_sigma_s{0.0, 0.0, 0.0};      ///< scattering coefficient inside (absorbing_dielectric)
+    double interior_g = 0.0;                   ///< HG asymmetry of the interior phase function (0 = isotropic)
+    RGBd albedo{0.8, 0.8, 0.8};                ///< Lambertian albedo (diffuse)
+
+    [[nodiscard]] static GrainMaterial make_dielectric(double ior) {
+        GrainMaterial m;
+        m.kind = GrainMaterialKind::dielectric;
+        m.ior = ior;
+        m.validate();
+        return m;
+    }
+    [[nodiscard]] static GrainMaterial make_absorbing_dielectric(double ior, RGBd sigma_a, RGBd sigma_s = RGBd(0.0),
+                                                                 double g = 0.0) {
+        GrainMaterial m;
+        m.kind = GrainMaterialKind::absorbing_dielectric;
+        m.ior = ior;
+        m.interior_sigma_a = sigma_a;
+        m.interior_sigma_s = sigma_s;
+        m.interior_g = g;
+        m.validate();
+        return m;
+    }
+    [[nodiscard]] static GrainMaterial make_diffuse(RGBd albedo) {
+        GrainMaterial m;
+        m.kind = GrainMaterialKind::diffuse;
+        m.albedo = albedo;
+        m.validate();
+        return m;
+    }
+    /// True if every channel behaves identically (one traced path serves all channels).
+    [[nodiscard]] bool is_grey() const noexcept {
+        switch (kind) {
+            case GrainMaterialKind::dielectric: return true;
+            case GrainMaterialKind::absorbing_dielectric:
+                return interior_sigma_a[0] == interior_sigma_a[1] && interior_sigma_a[1] == interior_sigma_a[2] &&
+                       interior_sigma_s[0] == interior_sigma_s[1] && interior_sigma_s[1] == interior_sigma_s[2];
+            case GrainMaterialKind::diffuse: return albedo[0] == albedo[1] && albedo[1] == albedo[2];
+        }
+        return true;
+    }
+    /// Throws grainlight::invalid_argument naming the bad parameter.
+    void validate() const {
+        const char* where = "GrainMaterial";
+        check_argument(ior > 0.0 && std::isfinite(ior), where, "ior", ior, "(0, inf)");
+        for (int c = 0; c < 3; ++c) {
+            check_argument(interior_sigma_a[c] >= 0.0 && std::isfinite(interior_sigma_a[c]), where, "interior_sigma_a",
+                           interior_sigma_a[c], "[0, inf)");
+            check_argument(interior_sigma_s[c] >= 0.0 && std::isfinite(interior_sigma_s[c]), where, "interior_sigma_s",
+                           interior_sigma_s[c], "[0, inf)");
+            check_argument(albedo[c] >= 0.0 && albedo[c] <= 1.0, where, "albedo", albedo[c], "[0, 1]");
+        }
+        check_argument(interior_g > -1.0 && interior_g < 1.0, where, "interior_g", interior_g, "(-1, 1)");
+    }
+};
+
+}  // namespace grainlight

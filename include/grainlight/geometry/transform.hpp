@@ -1,0 +1,63 @@
+/// @file grainlight/geometry/transform.hpp
+/// Rigid transforms for instanced grains: a rotation (orthonormal 3x3 matrix), a uniform scale
+/// and a translation, applied as x_world = translation + scale * R x_local. The rotation of a
+/// randomly oriented grain is drawn uniformly from SO(3) from three uniform numbers.
+#pragma once
+
+#include <cmath>
+#include <concepts>
+
+#include "grainlight/core/math.hpp"
+#include "grainlight/core/vector.hpp"
+
+namespace grainlight {
+
+/// Rotation as three orthonormal rows r0, r1, r2: to_local(v) = (r0.v, r1.v, r2.v) and
+/// to_world(v) = v.x r0 + v.y r1 + v.z r2 (the transpose).
+template <std::floating_point F>
+struct Rotation {
+    Vec3<F> r0{F(1), F(0), F(0)};
+    Vec3<F> r1{F(0), F(1), F(0)};
+    Vec3<F> r2{F(0), F(0), F(1)};
+
+    [[nodiscard]] GRAINLIGHT_HOST_DEVICE Vec3<F> to_local(const Vec3<F>& v) const noexcept {
+        return Vec3<F>(glm::dot(r0, v), glm::dot(r1, v), glm::dot(r2, v));
+    }
+    [[nodiscard]] GRAINLIGHT_HOST_DEVICE Vec3<F> to_world(const Vec3<F>& v) const noexcept {
+        return v.x * r0 + v.y * r1 + v.z * r2;
+    }
+};
+
+/// Uniformly distributed rotation (Haar measure on SO(3)) from u in [0,1)^3, via a uniform unit
+/// quaternion (Shoemake 1992, "Uniform random rotations", Graphics Gems III).
+template <std::floating_point F>
+[[nodiscard]] GRAINLIGHT_HOST_DEVICE inline Rotation<F> uniform_random_rotation(const Vec3<F>& u) noexcept {
+    const F s1 = safe_sqrt(F(1) - u.x), s2 = safe_sqrt(u.x);
+    const F a1 = F(2) * pi_v<F> * u.y, a2 = F(2) * pi_v<F> * u.z;
+    const F x = s1 * std::sin(a1), y = s1 * std::cos(a1), z = s2 * std::sin(a2), w = s2 * std::cos(a2);
+    Rotation<F> r;
+    r.r0 = Vec3<F>(F(1) - F(2) * (y * y + z * z), F(2) * (x * y - w * z), F(2) * (x * z + w * y));
+    r.r1 = Vec3<F>(F(2) * (x * y + w * z), F(1) - F(2) * (x * x + z * z), F(2) * (y * z - w * x));
+    r.r2 = Vec3<F>(F(2) * (x * z - w * y), F(2) * (y * z + w * x), F(1) - F(2) * (x * x + y * y));
+    return r;
+}
+
+/// Similarity transform x_world = translation + scale * R.to_world(x_local) (scale > 0).
+template <std::floating_point F>
+struct Transform {
+    Rotation<F> rotation{};
+    F scale = F(1);
+    Vec3<F> translation{F(0)};
+
+    [[nodiscard]] Vec3<F> point_to_world(const Vec3<F>& p) const noexcept {
+        return translation + scale * rotation.to_world(p);
+    }
+    [[nodiscard]] Vec3<F> point_to_local(const Vec3<F>& p) const noexcept {
+        return rotation.to_local(p - translation) / scale;
+    }
+    /// Directions (and normals: a similarity keeps them perpendicular) are only rotated.
+    [[nodiscard]] Vec3<F> vector_to_world(const Vec3<F>& v) const noexcept { return rotation.to_world(v); }
+    [[nodiscard]] Vec3<F> vector_to_local(const Vec3<F>& v) const noexcept { return rotation.to_local(v); }
+};
+
+}  // namespace grainlight

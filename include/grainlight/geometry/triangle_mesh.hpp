@@ -1,0 +1,184 @@
+/// @file grainlight/geometry/triangle_mesh.hpp
+/// Indexed triangle meshes: vertices, triangles (counter-clockwise seen from outside, so the
+/// geometric normal (v1 - v0) x (v2 - v0) points outward for a closed mesh), per-face unit
+/// normals, bounds, area/volume, a watertightness check and a small Wavefront OBJ loader.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <concepts>
+#include <cstdint>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "grainlight/core/error.hpp"
+#include "grainlight/core/vector.hpp"
+#include "grainlight/geometry/aabb.hpp"
+
+namespace grainlight {
+
+/// An indexed triangle mesh. Invariants after `validate()` (called by the loader and by
+/// `make_grain_mesh`): every index < vertices.size(), all coordinates finite, no degenerate
+/// (zero-area) triangles.
+template <std::floating_point F>
+struct TriangleMesh {
+    std::vector<Vec3<F>> vertices;
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+    /// Unit geometric normal per face (right-hand rule on the index order); fill with
+    /// `compute_face_normals()`.
+    std::vector<Vec3<F>> face_normals;
+
+    [[nodiscard]] std::size_t triangle_count() const noexcept { return triangles.size(); }
+
+    /// The three corners of triangle i.
+    [[nodiscard]] std::array<Vec3<F>, 3> corners(std::size_t i) const noexcept {
+        const auto& t = triangles[i];
+        return {vertices[t[0]], vertices[t[1]], vertices[t[2]]};
+    }
+
+    void compute_face_normals() {
+        face_normals.resize(triangles.size());
+        for (std::size_t i = 0; i < triangles.size(); ++i) {
+            const auto c = corners(i);
+            const Vec3<F> n = glm::cross(c[1] - c[0], c[2] - c[0]);
+            const F len = glm::length(n);
+            face_normals[i] = len > F(0) ? n / len : Vec3<F>(F(0), F(0), F(1));
+        }
+    }
+
+    [[nodiscard]] Aabb<F> bounds() const noexcept {
+        Aabb<F> b;
+        for (const auto& v : vertices) b.expand(v);
+        return b;
+    }
+
+    /// Total surface area.
+    [[nodiscard]] double area() const noexcept {
+        double a = 0;
+        for (std::size_t i = 0; i < triangles.size(); ++i) {
+            const auto c = corners(i);
+            a += 0.5 * double(glm::length(glm::cross(c[1] - c[0], c[2] - c[0])));
+        }
+        return a;
+    }
+
+    /// Signed enclosed volume (divergence theorem); positive for a closed mesh with outward normals.
+    [[nodiscard]] double signed_volume() const noexcept {
+        double v = 0;
+        for (std::size_t i = 0; i < triangles.size(); ++i) {
+            const auto c = corners(i);
+            const Vec3d a(c[0]), b(c[1]), d(c[2]);
+            v += glm::dot(a, glm::cross(b, d)) / 6.0;
+        }
+        return v;
+    }
+
+    /// Largest distance of a vertex from the origin (the radius of the origin-centred bounding
+    /// sphere the grain generators scale to).
+    [[nodiscard]] F max_vertex_radius() const noexcept {
+        F r = F(0);
+        for (const auto& v : vertices) r = std::max(r, glm::length(v));
+        return r;
+    }
+
+    /// Closed 2-manifold with consistent orientation: every undirected edge is used by exactly
+    /// two triangles, once in each direction. (Meng15 Sec. 3.1 assumes watertight grains and
+    /// aggregate meshes; the scatterometer's inside/outside bookkeeping relies on it.)
+    [[nodiscard]] bool is_watertight() const {
+        if (triangles.empty()) return false;
+        std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
+        for (const auto& t : triangles)
+            for (int k = 0; k < 3; ++k) {
+                const std::uint32_t a = t[k], b = t[(k + 1) % 3];
+                if (a == b) return false;
+                if (++directed[{a, b}] > 1) return false;  // same directed edge twice: inconsistent or non-manifold
+            }
+        for (const auto& [e, count] : directed)
+            if (!directed.count({e.second, e.first})) return false;
+        return true;
+    }
+
+    /// Check the invariants; throws grainlight::invalid_argument naming the first violation.
+    void validate(std::string_view where = "TriangleMesh") const {
+        check_argument(!triangles.empty(), where, "triangle count", triangles.size(), ">= 1");
+        for (std::size_t i = 0; i < vertices.size(); ++i) {
+            const auto& v = vertices[i];
+            check_argument(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z), where,
+                           "vertex " + std::to_string(i), v.x + v.y + v.z, "finite coordinates");
+        }
+        for (std::size_t i = 0; i < triangles.size(); ++i)
+            for (int k = 0; k < 3; ++k)
+                check_argument(triangles[i][k] < vertices.size(), where, "triangle " + std::to_string(i) + " index",
+                               triangles[i][k], "< vertex count " + std::to_string(vertices.size()));
+    }
+};
+
+namespace detail {
+/// Parse a 1-based (or negative, relative) OBJ index; returns false on malformed text.
+inline bool parse_obj_index(const std::string& tok, std::size_t n_vertices, std::uint32_t& out) {
+    const std::string head = tok.substr(0, tok.find('/'));
+    if (head.empty()) return false;
+    std::size_t pos = 0;
+    long long idx = 0;
+    try {
+        idx = std::stoll(head, &pos);
+    } catch (...) {
+        return false;
+    }
+    if (pos != head.size() || idx == 0) return false;
+    const long long resolved = idx > 0 ? idx - 1 : static_cast<long long>(n_vertices) + idx;
+    if (resolved < 0 || resolved >= static_cast<long long>(n_vertices)) return false;
+    out = static_cast<std::uint32_t>(resolved);
+    return true;
+}
+}  // namespace detail
+
+/// Load the `v` and `f` records of a Wavefront OBJ file (other records are ignored; polygons are
+/// fan-triangulated; `a/b/c` and negative indices accepted). Throws grainlight::io_error if the
+/// file cannot be opened, grainlight::format_error (with the line number) on a malformed vertex,
+/// an out-of-range index, a face with fewer than 3 vertices, or a file without faces.
+template <std::floating_point F = float>
+[[nodiscard]] TriangleMesh<F> load_obj(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw io_error("load_obj: cannot open '" + path + "'");
+    TriangleMesh<F> mesh;
+    std::string line;
+    std::size_t line_no = 0;
+    auto fail = [&](const std::string& what) {
+        throw format_error("load_obj: '" + path + "' line " + std::to_string(line_no) + ": " + what);
+    };
+    while (std::getline(in, line)) {
+        ++line_no;
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        std::istringstream ls(line);
+        std::string tag;
+        if (!(ls >> tag) || tag[0] == '#') continue;
+        if (tag == "v") {
+            double x, y, z;
+            if (!(ls >> x >> y >> z)) fail("vertex needs three numbers");
+            if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) fail("non-finite vertex coordinate");
+            mesh.vertices.emplace_back(F(x), F(y), F(z));
+        } else if (tag == "f") {
+            std::vector<std::uint32_t> idx;
+            std::string tok;
+            while (ls >> tok) {
+                std::uint32_t i = 0;
+                if (!detail::parse_obj_index(tok, mesh.vertices.size(), i))
+                    fail("bad or out-of-range vertex index '" + tok + "'");
+                idx.push_back(i);
+            }
+            if (idx.size() < 3) fail("face needs at least 3 vertices");
+            for (std::size_t k = 1; k + 1 < idx.size(); ++k) mesh.triangles.push_back({idx[0], idx[k], idx[k + 1]});
+        }
+    }
+    if (in.bad()) throw io_error("load_obj: read error on '" + path + "'");
+    if (mesh.triangles.empty()) throw format_error("load_obj: '" + path + "' contains no faces");
+    mesh.compute_face_normals();
+    return mesh;
+}
+
+}  // namespace grainlight
