@@ -1,0 +1,140 @@
+// examples/common/output.hpp: JSON summary lines, CSV files (written atomically) and PNG plots
+// drawn by Debian's matplotlib (/usr/bin/python3; the python3 on PATH may be another one).
+#pragma once
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace gl_examples {
+
+/// One JSON object built field by field; str() gives a single line.
+class Json {
+public:
+    Json& num(const std::string& key, double v) {
+        std::ostringstream os;
+        if (std::isfinite(v)) {
+            os << std::setprecision(10) << v;
+        } else {
+            os << "null";
+        }
+        return raw(key, os.str());
+    }
+    Json& integer(const std::string& key, long long v) { return raw(key, std::to_string(v)); }
+    Json& str(const std::string& key, const std::string& v) { return raw(key, quote(v)); }
+    Json& boolean(const std::string& key, bool v) { return raw(key, v ? "true" : "false"); }
+    Json& nums(const std::string& key, const std::vector<double>& v) {
+        std::ostringstream os;
+        os << "[" << std::setprecision(10);
+        for (std::size_t i = 0; i < v.size(); ++i) os << (i ? "," : "") << (std::isfinite(v[i]) ? v[i] : 0.0);
+        os << "]";
+        return raw(key, os.str());
+    }
+    Json& raw(const std::string& key, const std::string& json_value) {
+        body_ += (body_.empty() ? "" : ",") + quote(key) + ":" + json_value;
+        return *this;
+    }
+    [[nodiscard]] std::string str() const { return "{" + body_ + "}"; }
+    static std::string quote(const std::string& s) {
+        std::string o = "\"";
+        for (char c : s) {
+            if (c == '"' || c == '\\') o += '\\';
+            if (c == '\n') {
+                o += "\\n";
+                continue;
+            }
+            o += c;
+        }
+        return o + "\"";
+    }
+
+private:
+    std::string body_;
+};
+
+/// Write `text` to `path` atomically (temporary file + rename).
+inline void write_text_atomic(const std::filesystem::path& path, const std::string& text) {
+    const auto tmp = path.string() + ".tmp";
+    {
+        std::ofstream f(tmp, std::ios::binary);
+        if (!f) throw std::runtime_error("cannot write '" + tmp + "'");
+        f << text;
+        if (!f) throw std::runtime_error("write failed for '" + tmp + "'");
+    }
+    std::filesystem::rename(tmp, path);
+}
+
+/// A CSV table: header + rows of numbers (or strings).
+class Csv {
+public:
+    explicit Csv(std::vector<std::string> header) : header_(std::move(header)) {}
+    Csv& row(const std::vector<double>& values) {
+        std::ostringstream os;
+        os << std::setprecision(9);
+        for (std::size_t i = 0; i < values.size(); ++i) os << (i ? "," : "") << values[i];
+        rows_.push_back(os.str());
+        return *this;
+    }
+    Csv& row_text(const std::vector<std::string>& values) {
+        std::string s;
+        for (std::size_t i = 0; i < values.size(); ++i) s += (i ? "," : "") + values[i];
+        rows_.push_back(s);
+        return *this;
+    }
+    void write(const std::filesystem::path& path) const {
+        std::string text;
+        for (std::size_t i = 0; i < header_.size(); ++i) text += (i ? "," : "") + header_[i];
+        text += "\n";
+        for (auto& r : rows_) text += r + "\n";
+        write_text_atomic(path, text);
+    }
+
+private:
+    std::vector<std::string> header_;
+    std::vector<std::string> rows_;
+};
+
+/// Run a matplotlib script with Debian's python (writes a PNG). Returns false (with a note on
+/// stderr) when matplotlib is unavailable: the CSV is always written, the plot is a bonus.
+/// The script gets `csv` (path), `png` (path) and `out` (directory) predefined, plus numpy/plt.
+inline bool plot_with_matplotlib(const std::filesystem::path& script_path, const std::string& body,
+                                 const std::filesystem::path& png) {
+    std::string py = "import matplotlib\nmatplotlib.use('Agg')\nimport matplotlib.pyplot as plt\nimport numpy as np\n"
+                     "import csv as _csv\n"
+                     "def read_csv(p):\n"
+                     "    with open(p) as f:\n"
+                     "        r = list(_csv.reader(f))\n"
+                     "    h = r[0]; cols = {k: [] for k in h}\n"
+                     "    for row in r[1:]:\n"
+                     "        for k, v in zip(h, row):\n"
+                     "            try: cols[k].append(float(v))\n"
+                     "            except ValueError: cols[k].append(v)\n"
+                     "    return cols\n"
+                     "png = r'''" + png.string() + "'''\n" + body + "\n";
+    write_text_atomic(script_path, py);
+    const char* python = std::getenv("GRAINLIGHT_PYTHON");
+    const std::string interp = python ? python : "/usr/bin/python3";
+    const std::string cmd = interp + " '" + script_path.string() + "' 2>&1";
+    FILE* p = popen(cmd.c_str(), "r");
+    if (!p) return false;
+    std::string output;
+    char buf[256];
+    while (fgets(buf, sizeof buf, p)) output += buf;
+    const int rc = pclose(p);
+    if (rc != 0) {
+        std::cerr << "note: plot " << png << " not drawn (" << interp << " + matplotlib): " << output.substr(0, 300)
+                  << "\n";
+        return false;
+    }
+    return true;
+}
+
+}  // namespace gl_examples

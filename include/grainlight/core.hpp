@@ -1,0 +1,15 @@
+/// @file grainlight/core.hpp
+/// Umbrella header for the core layer (cheap: GLM only).
+#pragma once
+
+#include "grainlight/core/config.hpp"
+#include "grainlight/core/distribution.hpp"
+#include "grainlight/core/error.hpp"
+#include "grainlight/core/frame.hpp"
+#include "grainlight/core/math.hpp"
+#include "grainlight/core/ray.hpp"
+#include "grainlight/core/rng.hpp"
+#include "grainlight/core/spectrum.hpp"
+#include "grainlight/core/statistics.hpp"
+#include "grainlight/core/vector.hpp"
+#include "grainlight/core/warp.hpp"

@@ -1,0 +1,66 @@
+/// @file grainlight/media/concepts.hpp
+/// The Medium concept and the Interaction record shared by all media (continuous RTE,
+/// teleportation, shells, discrete particles).
+///
+/// `sample_interaction(ray, t_max, rng)` advances a path through the medium along `ray` up to
+/// distance `t_max` (the next boundary) and reports what happened:
+///   - `scatter`: the integrator should continue from `p` with a new direction. If the medium
+///     chose the direction itself (`has_direction`: teleportation, shells), use `w` (its pdf is
+///     `direction_pdf`, weight already in `weight`); otherwise sample the medium's phase function
+///     (`medium.phase()`), and NEE uses `phase().eval` (`nee == NeeKind::phase`).
+///   - `absorb`: the path ends.
+///   - `null`: a pass-through/null event: continue from `p` in the same direction (delta tracking,
+///     Meng15's pass-through of a bounding sphere).
+///   - `escape`: no event before t_max; the path reaches the boundary at ray(t_max).
+/// `weight` multiplies the path throughput in every case (spectral free-flight sampling and
+/// survival probabilities go there; a grey analog medium always gives weight 1).
+#pragma once
+
+#include <concepts>
+#include <cstdint>
+
+#include "grainlight/core/ray.hpp"
+#include "grainlight/core/rng.hpp"
+#include "grainlight/core/spectrum.hpp"
+
+namespace grainlight {
+
+enum class EventKind : std::uint8_t { scatter, absorb, null, escape };
+
+/// How next-event estimation works at an event.
+enum class NeeKind : std::uint8_t {
+    phase,  ///< connect with the medium's phase function (phase().eval)
+    none,   ///< no shadow connection possible (e.g. teleportation's recorded exit directions)
+    custom  ///< the medium provides its own (Moon07's p_r and f_a(d))
+};
+
+template <std::floating_point F, class S>
+struct Interaction {
+    EventKind kind = EventKind::escape;
+    F t = F(0);                ///< distance travelled along the ray
+    Vec3<F> p{F(0)};           ///< position of the event (may differ from ray(t): teleports)
+    Vec3<F> w{F(0)};           ///< new direction if `has_direction`
+    F direction_pdf = F(0);    ///< pdf of `w` (solid angle) if `has_direction`
+    S weight{F(1)};            ///< throughput multiplier
+    bool has_direction = false;
+    NeeKind nee = NeeKind::phase;
+
+    [[nodiscard]] bool is_scatter() const noexcept { return kind == EventKind::scatter; }
+    [[nodiscard]] bool is_escape() const noexcept { return kind == EventKind::escape; }
+    [[nodiscard]] bool is_absorb() const noexcept { return kind == EventKind::absorb; }
+};
+
+/// A participating medium usable by the walk kernel.
+template <class M>
+concept Medium = requires(const M& m, const Ray<typename M::Float>& r, typename M::Float t, Rng& rng) {
+    typename M::Float;
+    typename M::Spectrum;
+    { m.sample_interaction(r, t, rng) } -> std::same_as<Interaction<typename M::Float, typename M::Spectrum>>;
+    { m.transmittance(r, t, rng) } -> std::same_as<typename M::Spectrum>;
+};
+
+/// A medium whose scattering events are handled by sampling a phase function.
+template <class M>
+concept PhaseMedium = Medium<M> && requires(const M& m) { m.phase(); };
+
+}  // namespace grainlight

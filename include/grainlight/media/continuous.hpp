@@ -1,0 +1,116 @@
+/// @file grainlight/media/continuous.hpp
+/// Homogeneous RTE medium: extinction sigma_t and single-scattering albedo per channel, and a
+/// phase function policy.
+///
+/// Spectral free-flight sampling without bias: a channel c is chosen uniformly, the distance is
+/// drawn from sigma_t[c] exp(-sigma_t[c] t), and the sample is weighted by the one-sample MIS
+/// (balance) pdf averaged over channels (the "hero"/spectral-MIS estimator). The collision is then
+/// split into scatter/absorb by Russian roulette on the mean scatter weight. For a grey medium
+/// every weight is exactly 1 and events happen with the analog probabilities (albedo for
+/// scatter).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "grainlight/core/error.hpp"
+#include "grainlight/core/warp.hpp"
+#include "grainlight/media/concepts.hpp"
+#include "grainlight/phase/concepts.hpp"
+
+namespace grainlight {
+
+template <class Phase, class S = typename Phase::Spectrum>
+class ContinuousMedium {
+public:
+    using Float = typename Phase::Float;
+    using F = Float;
+    using Spectrum = S;
+    using PhaseType = Phase;
+    static constexpr std::size_t channels = S::size;
+
+    /// \param sigma_t extinction coefficient per channel (>= 0, finite; 1/length)
+    /// \param albedo  single-scattering albedo sigma_s / sigma_t per channel, in [0, 1]
+    ContinuousMedium(const S& sigma_t, const S& albedo, Phase phase)
+        : sigma_t_(sigma_t), albedo_(albedo), phase_(std::move(phase)) {
+        for (std::size_t c = 0; c < channels; ++c) {
+            check_argument(std::isfinite(double(sigma_t[c])) && sigma_t[c] >= F(0), "ContinuousMedium",
+                           "sigma_t[" + std::to_string(c) + "]", sigma_t[c], "[0, inf)");
+            check_argument(albedo[c] >= F(0) && albedo[c] <= F(1), "ContinuousMedium",
+                           "albedo[" + std::to_string(c) + "]", albedo[c], "[0, 1]");
+        }
+        grey_ = true;
+        for (std::size_t c = 1; c < channels; ++c) grey_ = grey_ && sigma_t[c] == sigma_t[0];
+    }
+    /// Grey convenience: the same sigma_t and albedo in every channel.
+    ContinuousMedium(F sigma_t, F albedo, Phase phase) : ContinuousMedium(S(sigma_t), S(albedo), std::move(phase)) {}
+
+    [[nodiscard]] const S& sigma_t() const noexcept { return sigma_t_; }
+    [[nodiscard]] const S& albedo() const noexcept { return albedo_; }
+    [[nodiscard]] S sigma_s() const noexcept { return sigma_t_ * albedo_; }
+    [[nodiscard]] S sigma_a() const noexcept { return sigma_t_ - sigma_s(); }
+    [[nodiscard]] const Phase& phase() const noexcept { return phase_; }
+
+    /// Transmittance exp(-sigma_t t) per channel (deterministic; rng unused).
+    [[nodiscard]] S transmittance(const Ray<F>&, F t, Rng&) const noexcept { return transmittance(t); }
+    [[nodiscard]] S transmittance(F t) const noexcept {
+        S tr;
+        for (std::size_t c = 0; c < channels; ++c) tr[c] = sigma_t_[c] > 0 ? std::exp(-sigma_t_[c] * t) : F(1);
+        return tr;
+    }
+
+    /// Sample the next event along `ray` before `t_max` (see media/concepts.hpp).
+    [[nodiscard]] Interaction<F, S> sample_interaction(const Ray<F>& ray, F t_max, Rng& rng) const noexcept {
+        Interaction<F, S> it;
+        // Pick the channel that drives the distance.
+        std::size_t c = 0;
+        if (!grey_) c = std::min<std::size_t>(std::size_t(rng.uniform<F>() * F(channels)), channels - 1);
+        const F u = rng.uniform<F>();
+        const F st = sigma_t_[c];
+        const F t = st > 0 ? sample_exponential(u, st) : std::numeric_limits<F>::infinity();
+        if (!(t < t_max)) {
+            // Escape: weight T(t_max) / P(escape), P averaged over channels.
+            it.kind = EventKind::escape;
+            it.t = t_max;
+            it.p = ray(t_max);
+            if (!grey_) {
+                const S tr = transmittance(t_max);
+                it.weight = tr / tr.average();
+            }
+            return it;
+        }
+        it.t = t;
+        it.p = ray(t);
+        // Collision weight sigma_s T(t) / pdf(t), pdf = channel average of sigma_t T.
+        S w_scatter = albedo_;
+        if (!grey_) {
+            const S tr = transmittance(t);
+            const S dens = sigma_t_ * tr;
+            w_scatter = sigma_s() * tr / dens.average();
+        }
+        const F q = std::min(F(1), w_scatter.average());
+        if (q > F(0) && rng.uniform<F>() < q) {
+            it.kind = EventKind::scatter;
+            it.weight = w_scatter / q;
+            it.nee = NeeKind::phase;
+        } else {
+            it.kind = EventKind::absorb;
+            it.weight = S(F(0));
+        }
+        return it;
+    }
+
+    [[nodiscard]] std::string to_string() const {
+        std::string s = "ContinuousMedium[sigma_t[0] = " + std::to_string(double(sigma_t_[0])) +
+                        ", albedo[0] = " + std::to_string(double(albedo_[0])) + "]";
+        return s;
+    }
+
+private:
+    S sigma_t_, albedo_;
+    Phase phase_;
+    bool grey_ = true;
+};
+
+}  // namespace grainlight

@@ -1,0 +1,237 @@
+// Tests for grainlight/core: RNG, warps, frames, distributions, statistics, spectra, errors.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <vector>
+
+#include "common/chi2.hpp"
+#include "grainlight/core/distribution.hpp"
+#include "grainlight/core/error.hpp"
+#include "grainlight/core/frame.hpp"
+#include "grainlight/core/ray.hpp"
+#include "grainlight/core/rng.hpp"
+#include "grainlight/core/spectrum.hpp"
+#include "grainlight/core/statistics.hpp"
+#include "grainlight/core/warp.hpp"
+
+using namespace grainlight;
+
+// Family-wise significance 0.01 over the chi-square tests of this file (Sidak).
+static const double kAlpha = gl_test::sidak(0.01, 8);
+
+TEST_CASE("Pcg32 reproduces the reference stream", "[core][rng]") {
+    // Source: M. O'Neill's pcg-c-basic demo (pcg32-demo.c), pcg32_srandom(42u, 54u):
+    // first outputs 0xa15c02b7 0x7b47f409 0xba1d3330 0x83d2f293 0xbfa4784b 0xcbed606e.
+    Pcg32 r(42u, 54u);
+    const std::uint32_t expected[] = {0xa15c02b7u, 0x7b47f409u, 0xba1d3330u, 0x83d2f293u, 0xbfa4784bu, 0xcbed606eu};
+    for (auto e : expected) CHECK(r.next_u32() == e);
+}
+
+TEST_CASE("Pcg32 advance equals stepping; keys give distinct deterministic streams", "[core][rng]") {
+    Pcg32 a(7, 3), b(7, 3);
+    for (int i = 0; i < 1000; ++i) (void)a.next_u32();
+    b.advance(1000);
+    CHECK(a.next_u32() == b.next_u32());
+
+    auto k1 = Pcg32::from_key(1, 2, 3), k2 = Pcg32::from_key(1, 2, 3), k3 = Pcg32::from_key(1, 2, 4),
+         k4 = Pcg32::from_key(1, 3, 3);
+    const auto x1 = k1.next_u64();
+    CHECK(x1 == k2.next_u64());
+    CHECK(x1 != k3.next_u64());
+    CHECK(x1 != k4.next_u64());
+
+    // Uniforms stay in [0, 1) and the mean of neighbouring keys is uncorrelated-looking.
+    Welford m;
+    for (std::uint64_t px = 0; px < 20000; ++px) {
+        auto r = Pcg32::from_key(99, px, 0);
+        const double u = r.uniform<double>();
+        REQUIRE(u >= 0.0);
+        REQUIRE(u < 1.0);
+        m.add(u);
+    }
+    CHECK(std::abs(m.mean() - 0.5) < 4 * std::sqrt(1.0 / 12.0 / 20000));
+    // float path never returns 1
+    Pcg32 f(1, 1);
+    for (int i = 0; i < 100000; ++i) REQUIRE(f.uniform<float>() < 1.0f);
+}
+
+TEST_CASE("Frame is orthonormal and round-trips", "[core][frame]") {
+    auto rng = Pcg32::from_key(5);
+    std::vector<Vec3d> normals = {{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {0, -1, 0}};
+    for (int i = 0; i < 200; ++i) normals.push_back(sample_uniform_sphere(rng.uniform2<double>()));
+    for (const auto& n : normals) {
+        Frame<double> f(n);
+        CHECK(glm::dot(f.s, f.t) == Approx(0).margin(1e-12));
+        CHECK(glm::dot(f.s, f.n) == Approx(0).margin(1e-12));
+        CHECK(glm::length(f.s) == Approx(1).epsilon(1e-12));
+        CHECK(glm::length(f.t) == Approx(1).epsilon(1e-12));
+        CHECK(glm::dot(glm::cross(f.s, f.t), f.n) == Approx(1).epsilon(1e-12));  // right-handed
+        const Vec3d v(0.3, -0.4, 0.5);
+        const Vec3d back = f.to_world(f.to_local(v));
+        CHECK(glm::length(back - v) < 1e-12);
+    }
+}
+
+TEST_CASE("Direction warps match their pdfs (chi-square)", "[core][warp][chi2]") {
+    using W = std::function<Vec3d(Vec2d)>;
+    struct Case {
+        const char* name;
+        W warp;
+        std::function<double(const Vec3d&)> pdf;
+    };
+    std::vector<Case> cases = {
+        {"uniform sphere", [](Vec2d u) { return sample_uniform_sphere(u); }, [](const Vec3d&) { return uniform_sphere_pdf<double>(); }},
+        {"uniform hemisphere", [](Vec2d u) { return sample_uniform_hemisphere(u); },
+         [](const Vec3d& w) { return w.z >= 0 ? uniform_hemisphere_pdf<double>() : 0.0; }},
+        {"cosine hemisphere", [](Vec2d u) { return sample_cosine_hemisphere(u); },
+         [](const Vec3d& w) { return cosine_hemisphere_pdf(w.z); }},
+        {"cone 45deg", [](Vec2d u) { return sample_uniform_cone(u, std::cos(pi_v<double> / 4)); },
+         [](const Vec3d& w) { return w.z >= std::cos(pi_v<double> / 4) ? uniform_cone_pdf(std::cos(pi_v<double> / 4)) : 0.0; }},
+    };
+    for (auto& c : cases) {
+        INFO(c.name);
+        auto res = gl_test::chi2_directions(
+            [&](double u1, double u2, Vec3d& w) {
+                w = c.warp(Vec2d(u1, u2));
+                return true;
+            },
+            c.pdf, 200000, 24, 24);
+        INFO(res.describe());
+        CHECK(res.p_value > kAlpha);
+    }
+}
+
+TEST_CASE("Disk warps are uniform by area", "[core][warp][chi2]") {
+    for (int which = 0; which < 2; ++which) {
+        // r^2 is uniform on [0, 1) for an area-uniform disk sample; phi uniform.
+        auto res = gl_test::chi2_1d(
+            [&](double u) {
+                static Pcg32 r2 = Pcg32::from_key(3);
+                const Vec2d p = which ? sample_uniform_disk_polar(Vec2d(u, r2.uniform<double>()))
+                                      : sample_uniform_disk_concentric(Vec2d(u, r2.uniform<double>()));
+                return p.x * p.x + p.y * p.y;
+            },
+            [](double x) { return std::clamp(x, 0.0, 1.0); }, 0.0, 1.0, 50, 100000);
+        INFO(res.describe());
+        CHECK(res.p_value > kAlpha);
+    }
+}
+
+TEST_CASE("PiecewiseConstant1D samples, pdf and inversion on a non-uniform grid", "[core][distribution]") {
+    const std::vector<double> x = {0.0, 0.1, 0.15, 0.5, 1.0, 3.0};
+    const std::vector<double> f = {2.0, 0.0, 5.0, 1.0, 0.25};
+    PiecewiseConstant1D<double> d(x, f);
+    const double integral = 2 * 0.1 + 0 + 5 * 0.35 + 1 * 0.5 + 0.25 * 2;
+    CHECK(d.integral() == Approx(integral));
+    CHECK(d.pdf(0.05) == Approx(2 / integral));
+    CHECK(d.pdf(0.12) == 0.0);
+    for (double u : {0.0, 0.1, 0.33, 0.5, 0.77, 0.999}) {
+        const double s = d.sample(u);
+        CHECK(d.invert(s) == Approx(u).margin(1e-12));
+    }
+    auto res = gl_test::chi2_1d([&](double u) { return d.sample(u); }, [&](double t) { return d.invert(t); }, 0.0, 3.0,
+                                60, 100000);
+    INFO(res.describe());
+    CHECK(res.p_value > kAlpha);
+}
+
+TEST_CASE("PiecewiseLinear1D exact inversion", "[core][distribution]") {
+    const std::vector<double> x = {-1.0, -0.5, 0.0, 0.9, 0.99, 1.0};
+    const std::vector<double> f = {0.1, 0.0, 1.0, 3.0, 30.0, 30.0};
+    PiecewiseLinear1D<double> d(x, f);
+    double trap = 0;
+    for (std::size_t i = 0; i + 1 < x.size(); ++i) trap += 0.5 * (f[i] + f[i + 1]) * (x[i + 1] - x[i]);
+    CHECK(d.integral() == Approx(trap));
+    for (double u : {0.0, 0.01, 0.2, 0.5, 0.8, 0.95, 0.9999}) {
+        double pdf = 0;
+        const double s = d.sample(u, &pdf);
+        CHECK(d.invert(s) == Approx(u).margin(1e-10));
+        CHECK(pdf == Approx(d.pdf(s)).epsilon(1e-9));
+    }
+    auto res = gl_test::chi2_1d([&](double u) { return d.sample(u); }, [&](double t) { return d.invert(t); }, -1.0, 1.0,
+                                80, 200000);
+    INFO(res.describe());
+    CHECK(res.p_value > kAlpha);
+}
+
+TEST_CASE("Distributions reject bad tables with a message naming the parameter", "[core][distribution][errors]") {
+    const std::vector<double> x = {0.0, 1.0, 2.0};
+    CHECK_THROWS_AS(PiecewiseConstant1D<double>(x, std::vector<double>{1.0, -1.0}), grainlight::invalid_argument);
+    CHECK_THROWS_WITH(PiecewiseConstant1D<double>(x, std::vector<double>{0.0, 0.0}), Catch::Contains("integral"));
+    CHECK_THROWS_WITH(PiecewiseLinear1D<double>(std::vector<double>{0.0, 0.0, 1.0}, std::vector<double>{1, 1, 1}),
+                      Catch::Contains("nodes[1]"));
+    CHECK_THROWS_WITH(PiecewiseLinear1D<double>(x, std::vector<double>{1.0, std::nan(""), 1.0}), Catch::Contains("values[1]"));
+    CHECK_THROWS_AS(DiscreteDistribution<double>(std::vector<double>{}), grainlight::invalid_argument);
+    CHECK_THROWS_WITH(DiscreteDistribution<double>(std::vector<double>{0.0, 0.0}), Catch::Contains("sum(weights)"));
+}
+
+TEST_CASE("DiscreteDistribution frequencies and remapping", "[core][distribution]") {
+    const std::vector<double> w = {1, 0, 3, 6};
+    DiscreteDistribution<double> d(w);
+    CHECK(d.pmf(0) == Approx(0.1));
+    CHECK(d.pmf(1) == 0.0);
+    std::vector<double> obs(4, 0.0), exp_(4, 0.0);
+    auto rng = Pcg32::from_key(8);
+    const int n = 100000;
+    for (int i = 0; i < n; ++i) {
+        double p = 0, ur = 0;
+        const auto k = d.sample(rng.uniform<double>(), &p, &ur);
+        REQUIRE(ur >= 0.0);
+        REQUIRE(ur < 1.0);
+        REQUIRE(p == Approx(d.pmf(k)));
+        obs[k] += 1;
+    }
+    for (int k = 0; k < 4; ++k) exp_[std::size_t(k)] = d.pmf(std::size_t(k)) * n;
+    auto res = gl_test::chi2_from_counts(obs, exp_);
+    CHECK(res.p_value > kAlpha);
+    CHECK(obs[1] == 0.0);
+}
+
+TEST_CASE("Welford agrees with the two-pass formulas and merges in any split", "[core][statistics]") {
+    std::vector<double> xs;
+    auto rng = Pcg32::from_key(4);
+    for (int i = 0; i < 1000; ++i) xs.push_back(1e6 + rng.uniform<double>());  // large offset: stability
+    double mean = 0;
+    for (double x : xs) mean += x;
+    mean /= double(xs.size());
+    double var = 0;
+    for (double x : xs) var += (x - mean) * (x - mean);
+    var /= double(xs.size() - 1);
+    Welford all, a, b;
+    for (std::size_t i = 0; i < xs.size(); ++i) {
+        all.add(xs[i]);
+        (i < 317 ? a : b).add(xs[i]);
+    }
+    a.merge(b);
+    CHECK(all.mean() == Approx(mean).epsilon(1e-14));
+    CHECK(all.variance() == Approx(var).epsilon(1e-9));
+    CHECK(a.mean() == Approx(all.mean()).epsilon(1e-14));
+    CHECK(a.variance() == Approx(all.variance()).epsilon(1e-9));
+    CHECK(all.standard_error() == Approx(std::sqrt(var / 1000.0)).epsilon(1e-9));
+}
+
+TEST_CASE("Spectrum arithmetic is component-wise", "[core][spectrum]") {
+    RGB a{1.f, 2.f, 3.f}, b(2.f);
+    CHECK((a * b)[2] == 6.f);
+    CHECK((a / b)[0] == 0.5f);
+    CHECK((a + 1.f)[1] == 3.f);
+    CHECK(a.max_value() == 3.f);
+    CHECK(a.average() == Approx(2.f));
+    CHECK(exp(RGB(0.f)) == RGB(1.f));
+    CHECK(!a.is_black());
+    CHECK(RGB(0.f).is_black());
+}
+
+TEST_CASE("Errors name the parameter, value and range", "[core][errors]") {
+    try {
+        check_argument(false, "Thing", "albedo", 1.5, "[0, 1]");
+        FAIL("no throw");
+    } catch (const grainlight::invalid_argument& e) {
+        const std::string m = e.what();
+        CHECK(m.find("Thing") != std::string::npos);
+        CHECK(m.find("albedo") != std::string::npos);
+        CHECK(m.find("1.5") != std::string::npos);
+        CHECK(m.find("[0, 1]") != std::string::npos);
+    }
+    CHECK_THROWS_AS(check_finite("X", "y", std::nan("")), grainlight::invalid_argument);
+}

@@ -1,0 +1,104 @@
+// Tests for grainlight/media/continuous: free-flight distribution (chi-square against the
+// exponential law), spectral sampling without bias, transmittance, events, and bad input.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "common/chi2.hpp"
+#include "grainlight/core/statistics.hpp"
+#include "grainlight/media.hpp"
+#include "grainlight/phase.hpp"
+
+using namespace grainlight;
+
+static_assert(Medium<ContinuousMedium<HenyeyGreenstein<float, RGB>>>);
+static_assert(PhaseMedium<ContinuousMedium<IsotropicPhase<double>>>);
+
+TEST_CASE("Grey free-flight distances follow sigma_t exp(-sigma_t t)", "[media][free-flight][chi2]") {
+    const double sigma_t = 2.5, t_max = 1.2;
+    ContinuousMedium<IsotropicPhase<double>> m(sigma_t, 1.0, {});
+    const Ray<double> ray(Vec3d(0), Vec3d(0, 0, 1));
+    auto rng = Pcg32::from_key(21);
+    auto res = gl_test::chi2_1d(
+        [&](double) {
+            auto it = m.sample_interaction(ray, t_max, rng);
+            REQUIRE(it.weight[0] == 1.0);
+            return it.is_escape() ? 1e9 : it.t;  // escapes land in the overflow cell
+        },
+        [&](double t) { return 1 - std::exp(-sigma_t * t); }, 0.0, t_max, 40, 200000);
+    INFO(res.describe());
+    CHECK(res.p_value > 0.01 / 3);
+}
+
+TEST_CASE("Grey medium: analog events with the albedo as scattering probability", "[media][events]") {
+    const double a = 0.7;
+    ContinuousMedium<IsotropicPhase<double>> m(1.0, a, {});
+    const Ray<double> ray(Vec3d(0), Vec3d(1, 0, 0));
+    auto rng = Pcg32::from_key(2);
+    int scatter = 0, absorb = 0, escape = 0;
+    const int n = 200000;
+    for (int i = 0; i < n; ++i) {
+        auto it = m.sample_interaction(ray, 2.0, rng);
+        if (it.is_scatter()) {
+            ++scatter;
+            CHECK(it.weight[0] == 1.0);
+            CHECK(glm::length(it.p - ray(it.t)) < 1e-12);
+        }
+        absorb += it.is_absorb();
+        escape += it.is_escape();
+    }
+    const double p_esc = std::exp(-2.0);
+    CHECK(double(escape) / n == Approx(p_esc).margin(4 * std::sqrt(p_esc * (1 - p_esc) / n)));
+    const double p_sc = a * (1 - p_esc);
+    CHECK(double(scatter) / n == Approx(p_sc).margin(4 * std::sqrt(p_sc * (1 - p_sc) / n)));
+    CHECK(scatter + absorb + escape == n);
+}
+
+TEST_CASE("Spectral sigma_t: free-flight estimator is unbiased per channel", "[media][spectral]") {
+    // Per channel c the expected weighted escape is exp(-sigma_c t_max) and the expected weighted
+    // scatter count is albedo_c (1 - exp(-sigma_c t_max)) (closed forms).
+    const RGBd sigma{0.5, 2.0, 6.0}, albedo{0.9, 0.5, 0.99};
+    ContinuousMedium<IsotropicPhase<double, RGBd>, RGBd> m(sigma, albedo, {});
+    const double t_max = 0.8;
+    const Ray<double> ray(Vec3d(0), Vec3d(0, 1, 0));
+    auto rng = Pcg32::from_key(31);
+    Welford esc[3], sca[3], first_moment[3];
+    for (int i = 0; i < 400000; ++i) {
+        auto it = m.sample_interaction(ray, t_max, rng);
+        for (int c = 0; c < 3; ++c) {
+            esc[c].add(it.is_escape() ? it.weight[c] : 0.0);
+            sca[c].add(it.is_scatter() ? it.weight[c] : 0.0);
+            first_moment[c].add(it.is_scatter() ? it.weight[c] * it.t : 0.0);
+        }
+    }
+    for (int c = 0; c < 3; ++c) {
+        INFO("channel " << c);
+        const double e = std::exp(-sigma[c] * t_max);
+        CHECK(esc[c].mean() == Approx(e).margin(4 * esc[c].standard_error() + 1e-12));
+        CHECK(sca[c].mean() == Approx(albedo[c] * (1 - e)).margin(4 * sca[c].standard_error()));
+        // E[w t 1{scatter}] = albedo int_0^tmax t sigma e^{-sigma t} dt
+        const double s = sigma[c];
+        const double mom = albedo[c] * ((1 - e) / s - t_max * e);
+        CHECK(first_moment[c].mean() == Approx(mom).margin(4 * first_moment[c].standard_error()));
+    }
+}
+
+TEST_CASE("Transmittance is exp(-sigma_t t)", "[media]") {
+    ContinuousMedium<IsotropicPhase<float, RGB>, RGB> m(RGB{0.f, 1.f, 3.f}, RGB(0.5f), {});
+    Rng rng;
+    auto tr = m.transmittance(Ray<float>(), 0.5f, rng);
+    CHECK(tr[0] == 1.0f);
+    CHECK(tr[1] == Approx(std::exp(-0.5)));
+    CHECK(tr[2] == Approx(std::exp(-1.5)));
+    CHECK(m.sigma_s()[1] == Approx(0.5f));
+    CHECK(m.sigma_a()[2] == Approx(1.5f));
+}
+
+TEST_CASE("Continuous medium rejects bad parameters", "[media][errors]") {
+    using M = ContinuousMedium<IsotropicPhase<double>>;
+    CHECK_THROWS_WITH(M(-1.0, 0.5, {}), Catch::Contains("sigma_t") && Catch::Contains("-1"));
+    CHECK_THROWS_WITH(M(std::nan(""), 0.5, {}), Catch::Contains("sigma_t"));
+    CHECK_THROWS_WITH(M(1.0, 1.5, {}), Catch::Contains("albedo") && Catch::Contains("[0, 1]"));
+    CHECK_THROWS_AS(M(1.0, -0.1, {}), grainlight::invalid_argument);
+    CHECK_THROWS_AS(M(std::numeric_limits<double>::infinity(), 0.5, {}), grainlight::invalid_argument);
+}
