@@ -1,0 +1,30 @@
+# Extra ctest entries for the integrators area (included from tests/CMakeLists.txt).
+# They run the `slab` example: bad arguments must fail with a message naming the argument, and a
+# quick run's JSON line must match the adding-doubling reference (halfspace_albedo.md) within
+# 3 standard errors + 0.002.
+# tests/ is added before examples/, so `if(TARGET slab)` would be false here: test for the
+# example's source instead ($<TARGET_FILE:slab> resolves at generate time, in any order).
+if(TARGET slab OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/slab.cpp))
+  add_test(NAME slab_bad_albedo COMMAND $<TARGET_FILE:slab> --albedo 1.5 --optical-depth 1 --paths 100)
+  set_tests_properties(slab_bad_albedo PROPERTIES WILL_FAIL TRUE LABELS "example;integrators")
+  add_test(NAME slab_bad_albedo_message COMMAND $<TARGET_FILE:slab> --albedo 1.5 --optical-depth 1 --paths 100)
+  set_tests_properties(slab_bad_albedo_message PROPERTIES PASS_REGULAR_EXPRESSION "albedo = 1.5"
+                       LABELS "example;integrators")
+  add_test(NAME slab_bad_optical_depth COMMAND $<TARGET_FILE:slab> --optical-depth abc)
+  set_tests_properties(slab_bad_optical_depth PROPERTIES WILL_FAIL TRUE LABELS "example;integrators")
+  add_test(NAME slab_unknown_argument COMMAND $<TARGET_FILE:slab> --albedoo 0.5)
+  set_tests_properties(slab_unknown_argument PROPERTIES WILL_FAIL TRUE LABELS "example;integrators")
+  # Index-matched, g = 0, a = 0.9, b = 1, mu0 = 1: Prahl AD R = 0.26741, T = 0.59163.
+  add_test(NAME slab_json_index_matched
+           COMMAND ${CMAKE_COMMAND} -DSLAB=$<TARGET_FILE:slab>
+                   "-DARGS=--albedo;0.9;--optical-depth;1;--g;0;--ior;1;--mu0;1;--paths;400000;--seed;5"
+                   -DR_REF=0.26741 -DT_REF=0.59163
+                   -P ${CMAKE_CURRENT_SOURCE_DIR}/integrators/check_slab_json.cmake)
+  # n = 1.4, g = 0.8, a = 0.95, b = 1: Prahl AD R = 0.10840, T = 0.78517.
+  add_test(NAME slab_json_refractive
+           COMMAND ${CMAKE_COMMAND} -DSLAB=$<TARGET_FILE:slab>
+                   "-DARGS=--albedo;0.95;--optical-depth;1;--g;0.8;--ior;1.4;--mu0;1;--paths;400000;--seed;6"
+                   -DR_REF=0.10840 -DT_REF=0.78517
+                   -P ${CMAKE_CURRENT_SOURCE_DIR}/integrators/check_slab_json.cmake)
+  set_tests_properties(slab_json_index_matched slab_json_refractive PROPERTIES LABELS "example;integrators")
+endif()
