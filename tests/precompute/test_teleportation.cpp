@@ -1,0 +1,122 @@
+// Tests of the teleportation-transport medium and the effective RTE parameters (Meng15 Eqs. 1-4,
+// Sec. 4.2.3).
+#include <catch2/catch.hpp>
+
+#include <vector>
+
+#include "grainlight/media/teleportation.hpp"
+
+using namespace grainlight;
+
+namespace {
+GrainStats stats_of(double rho, GrainMaterial m, std::uint64_t rays = 60000, std::uint64_t seed = 21) {
+    ScatterometerConfig c;
+    c.rays = rays;
+    c.seed = seed;
+    return run_scatterometer(ScatterometerGrain::sphere(rho, m), c);
+}
+}  // namespace
+
+TEST_CASE("Eqs. 1 and 3 in closed form", "[teleportation]") {
+    // Eq. 1 at f = 0.63, R = 1: sigma_b = 3 * 0.63 / (4 * 0.37).
+    CHECK(bounding_sphere_sigma_b(0.63, 1.0) == Approx(1.89 / 1.48));
+    CHECK(bounding_sphere_sigma_b(0.5, 2.0) == Approx(0.375));
+    // Eq. 3 is the sum of Eq. 2's series: check against the partial sums.
+    const double lb = 0.8, ld = 0.9, beta = 0.4;
+    double series = 0;
+    for (int i = 0; i < 2000; ++i) series += beta * std::pow(1 - beta, i) * (i * (lb + ld) + lb);
+    CHECK(lambda_beta_eq3(lb, ld, beta) == Approx(series).epsilon(1e-10));
+    CHECK(lambda_beta_eq3(lb, ld, 1.0) == Approx(lb));
+    CHECK_THROWS_AS(bounding_sphere_sigma_b(0.0, 1.0), grainlight::invalid_argument);
+    CHECK_THROWS_AS(bounding_sphere_sigma_b(1.0, 1.0), grainlight::invalid_argument);
+    CHECK_THROWS_AS(bounding_sphere_sigma_b(0.6, 0.0), grainlight::invalid_argument);
+    CHECK_THROWS_AS(bounding_sphere_sigma_b(0.6, -1.0), grainlight::invalid_argument);
+    CHECK_THROWS_AS(lambda_beta_eq3(1, 1, 0.0), grainlight::invalid_argument);
+}
+
+TEST_CASE("effective RTE parameters scale with f and R without recomputation", "[teleportation]") {
+    const auto s = stats_of(0.7, GrainMaterial::make_absorbing_dielectric(1.5, RGBd{0.1, 0.4, 1.0}), 40000);
+    const auto p1 = effective_rte_params(s, 0.6, 1.0);
+    const auto p2 = effective_rte_params(s, 0.6, 3.0);
+    for (std::size_t c = 0; c < 3; ++c) {
+        // Every length scales with R, so every coefficient scales with 1/R.
+        CHECK(p2.sigma_t[c] == Approx(p1.sigma_t[c] / 3.0));
+        CHECK(p2.sigma_tr[c] == Approx(p1.sigma_tr[c] / 3.0));
+        CHECK(p2.alpha_s_reduced[c] == Approx(p1.alpha_s_reduced[c]));
+        // Eq. 4 and Sec. 4.2.3 by hand.
+        const double lt = p1.lambda_beta + s.alpha_s(c) * s.lambda_s(c);
+        CHECK(p1.sigma_t[c] == Approx(1.0 / lt));
+        const double ss = s.alpha_s(c) / lt, sa = 1.0 / lt - ss, ssr = (1 - s.g(c)) * ss;
+        CHECK(p1.sigma_t_reduced[c] == Approx(ssr + sa));
+        CHECK(p1.alpha_s_reduced[c] == Approx(ssr / (ssr + sa)));
+    }
+    CHECK(p1.alpha_s[0] > p1.alpha_s[2]);
+    const auto medium = make_effective_medium(s, 0.6, 1.0);
+    CHECK(double(medium.sigma_t()[1]) == Approx(p1.sigma_t[1]).epsilon(1e-6));
+    CHECK(double(medium.albedo()[2]) == Approx(p1.alpha_s[2]).epsilon(1e-6));
+    CHECK_THROWS_AS(effective_rte_params(s, 0.7, 0.0), grainlight::invalid_argument);
+    CHECK_THROWS_AS(effective_rte_params(s, 1.5, 1.0), grainlight::invalid_argument);
+}
+
+TEST_CASE("TT medium: mean free flight between exit points equals 1/sigma_t of Eq. 4", "[teleportation]") {
+    // The TT process flies Exp(sigma_b) to a bounding sphere, passes through with probability
+    // 1 - beta (adding a chord), and on a hit adds the teleport (0 if absorbed). Its mean
+    // displacement along the ray is Eq. 4's lambda_beta + alpha_s lambda_s (for grains whose mean
+    // teleport points forward). Binning the tables into cells costs < 1 %.
+    struct Case {
+        double rho;
+        GrainMaterial m;
+    };
+    for (const Case& k : {Case{1.0, GrainMaterial::make_dielectric(1.5)}, Case{0.6, GrainMaterial::make_dielectric(1.33)},
+                          Case{0.8, GrainMaterial::make_absorbing_dielectric(1.5, RGBd(0.5))}}) {
+        const auto s = stats_of(k.rho, k.m);
+        for (double R : {1.0, 0.25}) {
+            const TeleportationMedium<float> tt(s, 0.63, R);
+            Rng rng = Rng::from_key(99, std::uint64_t(k.rho * 100));
+            const Ray<float> ray(Vec3f(0.0f), Vec3f(0, 0, 1));
+            const int n = 200000;
+            double sum = 0, sum2 = 0;
+            int absorbed = 0;
+            for (int i = 0; i < n; ++i) {
+                const auto it = tt.sample_interaction(ray, std::numeric_limits<float>::infinity(), rng);
+                REQUIRE(!it.is_escape());
+                const double z = double(it.p.z);  // displacement along the incident direction
+                sum += z;
+                sum2 += z * z;
+                absorbed += it.is_absorb();
+                if (it.is_scatter()) {
+                    REQUIRE(std::abs(glm::length(it.w) - 1.0f) < 1e-4f);
+                    REQUIRE(it.nee == NeeKind::none);
+                    REQUIRE(it.has_direction);
+                }
+            }
+            const double mean = sum / n, sd = std::sqrt(sum2 / n - mean * mean) / std::sqrt(double(n));
+            const double expected = 1.0 / tt.params().sigma_t[0];
+            CHECK(mean == Approx(expected).margin(4 * sd + 0.01 * expected));
+            CHECK(double(absorbed) / n == Approx(1.0 - s.alpha_s(0)).margin(0.005));
+        }
+    }
+}
+
+TEST_CASE("TT medium: spectral weights average to alpha_s per channel; transmittance", "[teleportation]") {
+    const RGBd sigma{0.05, 0.5, 2.0};
+    const auto s = stats_of(1.0, GrainMaterial::make_absorbing_dielectric(1.5, sigma), 40000);
+    const TeleportationMedium<float> tt(s, 0.6, 1.0);
+    Rng rng = Rng::from_key(5);
+    const Ray<float> ray(Vec3f(0.0f), Vec3f(1, 0, 0));
+    const int n = 200000;
+    RGBd acc(0.0);
+    for (int i = 0; i < n; ++i) {
+        const auto it = tt.sample_interaction(ray, 1e30f, rng);
+        for (std::size_t c = 0; c < 3; ++c) acc[c] += it.is_scatter() ? double(it.weight[c]) : 0.0;
+    }
+    for (std::size_t c = 0; c < 3; ++c) CHECK(acc[c] / n == Approx(s.alpha_s(c)).margin(0.01));
+    // beta = 1: the transmittance over distance d is exp(-sigma_b d) exactly (Eq. 1).
+    double tr = 0;
+    const float d = 1.5f;
+    for (int i = 0; i < n; ++i) tr += double(tt.transmittance(ray, d, rng)[0]);
+    CHECK(tr / n == Approx(std::exp(-tt.sigma_b() * d)).margin(4 * std::sqrt(0.25 / n)));
+    // escape when t_max is tiny
+    const auto e = tt.sample_interaction(ray, 1e-6f, rng);
+    CHECK(e.is_escape());
+}
