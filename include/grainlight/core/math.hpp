@@ -43,20 +43,19 @@ template <std::floating_point F>
     return (F(1) - t) * a + t * b;
 }
 
-/// Largest index i in [0, size-2] with pred(i) true, for a monotone predicate (pbrt's FindInterval).
+/// Largest index i in [0, size-2] with pred(i) true, for a monotone predicate (pbrt's
+/// FindInterval contract: clamps to 0 and size-2). Branchless halving so that lookups in large
+/// tables do not pay one branch misprediction per level.
 template <class Pred>
 [[nodiscard]] GRAINLIGHT_HOST_DEVICE inline std::size_t find_interval(std::size_t size, Pred pred) noexcept {
-    std::size_t first = 1, count = size > 2 ? size - 2 : 0;
-    while (count > 0) {
-        std::size_t half = count >> 1, middle = first + half;
-        if (pred(middle)) {
-            first = middle + 1;
-            count -= half + 1;
-        } else {
-            count = half;
-        }
+    if (size < 2) return 0;
+    std::size_t base = 0, len = size - 1;  // candidates [0, size-2]
+    while (len > 1) {
+        const std::size_t half = len >> 1;
+        base = pred(base + half) ? base + half : base;
+        len -= half;
     }
-    return first - 1 < size - 2 ? first - 1 : (size >= 2 ? size - 2 : 0);
+    return base;
 }
 
 }  // namespace grainlight

@@ -95,9 +95,18 @@ public:
 
     [[nodiscard]] PhaseEval<F, S> eval(const Vec3<F>& w_in, const Vec3<F>& w_out) const noexcept {
         const double mu = std::clamp(double(glm::dot(w_in, w_out)), -1.0, 1.0);
+        if (grey_) {
+            const F p = F(pdf_cos_theta(mu, 0) * inv_two_pi_v<double>);
+            return {S(p), p};
+        }
         S value;
-        for (std::size_t c = 0; c < channels; ++c) value[c] = F(pdf_cos_theta(mu, grey_ ? 0 : c) * inv_two_pi_v<double>);
-        return {value, F(mixture_pdf_cos_theta(mu) * inv_two_pi_v<double>)};
+        double sum = 0;
+        for (std::size_t c = 0; c < channels; ++c) {
+            const double pc = pdf_cos_theta(mu, c);
+            value[c] = F(pc * inv_two_pi_v<double>);
+            sum += pc;
+        }
+        return {value, F(sum / double(channels) * inv_two_pi_v<double>)};
     }
 
     [[nodiscard]] PhaseSample<F, S> sample(const Vec3<F>& w_in, Vec2<F> u) const noexcept {
@@ -108,11 +117,12 @@ public:
             c = std::min(std::size_t(scaled), channels - 1);
             ux = scaled - double(c);
         }
+        double pdf_c = 0;
         const double mu =
-            mode_ == Interpolation::linear ? lin_[c].sample(ux) : pc_[c].sample(ux);
+            mode_ == Interpolation::linear ? lin_[c].sample(ux, &pdf_c) : pc_[c].sample(ux, &pdf_c);
         const Vec3<F> w = direction_from_cosine(w_in, F(mu), F(2) * pi_v<F> * u.y);
         S weight(F(1));
-        const double pdf = mixture_pdf_cos_theta(mu);
+        const double pdf = grey_ ? pdf_c : mixture_pdf_cos_theta(mu);
         if (!grey_) {
             for (std::size_t k = 0; k < channels; ++k) weight[k] = pdf > 0 ? F(pdf_cos_theta(mu, k) / pdf) : F(0);
         }
