@@ -25,5 +25,13 @@ cmake -S "$ROOT/tests/consumer" -B "$BUILD/_consumer" -DCMAKE_BUILD_TYPE=Release
       -DCMAKE_PREFIX_PATH="$BUILD/_install" -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF >/dev/null
 cmake --build "$BUILD/_consumer" -j"$JOBS"
 "$BUILD/_consumer/consumer"
+"$BUILD/_consumer/consumer_noexcept"
+
+echo "== consumer project via add_subdirectory" >&2
+rm -rf "$BUILD/_consumer_subdir"
+cmake -S "$ROOT/tests/consumer" -B "$BUILD/_consumer_subdir" -DCMAKE_BUILD_TYPE=Release \
+      -DGRAINLIGHT_SOURCE_DIR="$ROOT" >/dev/null
+cmake --build "$BUILD/_consumer_subdir" --target consumer -j"$JOBS"
+"$BUILD/_consumer_subdir/consumer"
 
 echo "== all tests passed in $(( $(date +%s) - start )) s" >&2

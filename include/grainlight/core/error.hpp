@@ -7,6 +7,8 @@
 #pragma once
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -50,7 +52,13 @@ template <class T>
     std::string msg;
     msg.append(where).append(": ").append(param).append(" = ").append(detail::to_display(value));
     msg.append(" is invalid; valid range: ").append(range);
+#if defined(__cpp_exceptions) || defined(__EXCEPTIONS)
     throw invalid_argument(msg);
+#else
+    // -fno-exceptions builds (device code, some engines): report and stop.
+    std::fputs(("grainlight: " + msg + "\n").c_str(), stderr);
+    std::abort();
+#endif
 }
 
 /// Validate `cond`; on failure raise_invalid_argument. NaN values fail every range check because
