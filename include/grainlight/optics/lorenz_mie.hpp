@@ -120,7 +120,7 @@ public:
         MieEfficiencies q;
         q.qext = s * ext;
         q.qsca = s * sca;
-        q.qabs = q.qext - q.qsca;
+        q.qabs = m_.imag() > 0 ? q.qext - q.qsca : 0.0;  // exactly 0 without absorption (no round-off sign)
         q.qback = std::norm(back) / (x_ * x_);
         q.g = sca > 0 ? 2 * (asy1 + asy2) / sca : 0.0;
         return q;
