@@ -157,7 +157,7 @@ inline GrainRadiusFunction make_radius_function(GrainShape shape, std::uint64_t 
             for (int i = 0; i < 14; ++i) {
                 const double z = 1.0 - 2.0 * rng.next_double(), ph = 2.0 * pi_v<double> * rng.next_double();
                 const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
-                const double amp = (i < 9 ? 0.35 : -0.18) * (0.4 + 0.6 * rng.next_double());
+                const double amp = (i < 9 ? 0.28 : -0.15) * (0.4 + 0.6 * rng.next_double());
                 const double width = 0.05 + 0.12 * rng.next_double();
                 f.lobes.push_back({s * std::cos(ph), s * std::sin(ph), z, amp, width});
             }
@@ -282,5 +282,52 @@ struct GrainMaterial {
         check_argument(interior_g > -1.0 && interior_g < 1.0, where, "interior_g", interior_g, "(-1, 1)");
     }
 };
+
+}  // namespace grainlight
+
+namespace grainlight {
+
+/// A named grain of Meng15 Table 1 as this library models it: a procedural shape with its
+/// bounding radius (in units of the packing's bounding sphere), a shape seed and a material.
+/// Interior coefficients are per bounding-sphere radius. These are *our* procedural stand-ins
+/// for the paper's scanned/modelled grains (docs/meng15.md explains where the statistics differ).
+struct GrainPreset {
+    std::string name;          ///< e.g. "glass-bead"
+    std::string paper_column;  ///< Table 1 column ("" if the grain is not in Table 1)
+    GrainShape shape = GrainShape::sphere;
+    double radius = 1.0;
+    std::uint64_t seed = 1;
+    GrainMaterial material{};
+};
+
+/// The presets: glass-bead, snow, salt (pink salt), sugar (cane sugar), brown-sugar, sand, flour,
+/// rice. Pink salt gets a faint absorption, brown sugar and sand an interior absorbing (sand:
+/// also scattering) medium, flour is a white Lambertian grain.
+[[nodiscard]] inline std::vector<GrainPreset> grain_presets() {
+    std::vector<GrainPreset> p;
+    p.push_back({"glass-bead", "glass beads", GrainShape::sphere, 1.0, 1, GrainMaterial::make_dielectric(1.5)});
+    p.push_back({"flour", "flour", GrainShape::crystal, 0.96, 11, GrainMaterial::make_diffuse(RGBd{0.998, 0.996, 0.99})});
+    p.push_back({"salt", "pink salt", GrainShape::crystal, 0.9, 3,
+                 GrainMaterial::make_absorbing_dielectric(1.54, RGBd{0.001, 0.006, 0.004})});
+    p.push_back({"sand", "sand", GrainShape::snow, 1.0, 5,
+                 GrainMaterial::make_absorbing_dielectric(1.54, RGBd{0.12, 0.2, 0.32}, RGBd{4.0, 4.0, 4.0}, 0.0)});
+    p.push_back({"snow", "snow", GrainShape::snow, 1.0, 7, GrainMaterial::make_dielectric(1.31)});
+    p.push_back({"sugar", "cane sugar", GrainShape::crystal, 1.0, 9, GrainMaterial::make_dielectric(1.56)});
+    p.push_back({"brown-sugar", "brown sugar", GrainShape::crystal, 1.0, 13,
+                 GrainMaterial::make_absorbing_dielectric(1.56, RGBd{0.06, 0.13, 0.26}, RGBd(1.0), 0.0)});
+    p.push_back({"rice", "", GrainShape::rice, 1.0, 17,
+                 GrainMaterial::make_absorbing_dielectric(1.53, RGBd{0.01, 0.01, 0.02}, RGBd{3.0, 3.0, 3.0}, 0.0)});
+    return p;
+}
+
+/// The preset called `name`; throws grainlight::invalid_argument listing the valid names.
+[[nodiscard]] inline GrainPreset grain_preset(std::string_view name) {
+    std::string names;
+    for (const auto& p : grain_presets()) {
+        if (p.name == name) return p;
+        names += (names.empty() ? "" : "|") + p.name;
+    }
+    raise_invalid_argument("grain_preset", "preset", std::string(name), names);
+}
 
 }  // namespace grainlight
