@@ -245,3 +245,34 @@ TEST_CASE("bad grains and settings give clear errors", "[scatterometer][errors]"
     c.grid.phase_bins = 0;
     CHECK_THROWS_AS(run_scatterometer(grain, c), grainlight::invalid_argument);
 }
+
+TEST_CASE("glass bead lambda_s against an independent deterministic Fresnel-series computation", "[scatterometer]") {
+    // Independent of the 3D Monte Carlo tracer: in the plane of incidence a ray at impact
+    // parameter b (density 2b) enters at angle phi_i on the unit circle; path p >= 1 (p - 1
+    // internal reflections, weight T^2 R^(p-1)) exits at phi_i + p (pi - 2 theta_t), the p = 0
+    // reflection has zero teleport. lambda_s = E[z_o - z_i | exit]. This gives 1.424 for
+    // ior 1.5 (issue 4's "1.42") and 1.440 for ior 1.46 (Meng15 Table 1's 1.44).
+    auto series = [](double eta) {
+        const int n = 4000;
+        double num = 0, den = 0;
+        for (int k = 0; k < n; ++k) {
+            const double b = std::sqrt((k + 0.5) / n), zi = -std::sqrt(1 - b * b), ci = -zi;
+            const double R = fresnel_dielectric(ci, eta), T = 1 - R;
+            const double theta_t = std::asin(b / eta), phi = std::atan2(zi, b);
+            den += R;
+            double w = T;
+            for (int p = 1; p < 80; ++p) {
+                num += w * T * (std::sin(phi + p * (pi_v<double> - 2 * theta_t)) - zi);
+                den += w * T;
+                w *= R;
+            }
+        }
+        return num / den;
+    };
+    for (double eta : {1.5, 1.46}) {
+        const auto s = run_scatterometer(ScatterometerGrain::sphere(1.0, GrainMaterial::make_dielectric(eta)), config(200000, 77));
+        CHECK(s.lambda_s(0) == Approx(series(eta)).margin(4 * s.teleport_along_stderr(0)));
+    }
+    CHECK(series(1.5) == Approx(1.424).margin(0.001));
+    CHECK(series(1.46) == Approx(1.440).margin(0.001));
+}
