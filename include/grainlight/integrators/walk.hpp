@@ -77,7 +77,7 @@ struct WalkOptions {
 template <std::floating_point F, class S>
 struct PathState {
     Ray<F> ray;               ///< current ray (origin = last event, unit direction)
-    S throughput{F(1)};       ///< path weight so far
+    S throughput = S(F(1));   ///< path weight so far (NB: S{x} would be an initializer list: (x, 0, 0))
     int medium = -1;          ///< index of the medium the ray travels in (-1 = none)
     int depth = 0;            ///< number of scattering + surface events so far
     bool specular = true;     ///< last direction was chosen by a delta event (camera, Fresnel)

@@ -1,0 +1,164 @@
+/// @file grainlight/scene/shapes.hpp
+/// Shapes of the small scene layer: sphere, axis-aligned box, quad (parallelogram) and triangle
+/// mesh (through the SAH BVH of geometry/bvh.hpp). Each shape answers
+/// `intersect(ray, t, n)`: the closest hit with t in (0, ray.t_max) and the unit geometric normal
+/// pointing to the shape's *outside* (outward for closed shapes; for a quad, cross(edge_u,
+/// edge_v) / |..|). Queries allocate nothing and throw nothing; constructors validate.
+#pragma once
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <string>
+#include <utility>
+
+#include "grainlight/core/error.hpp"
+#include "grainlight/core/ray.hpp"
+#include "grainlight/core/vector.hpp"
+#include "grainlight/geometry/bvh.hpp"
+#include "grainlight/geometry/sphere.hpp"
+#include "grainlight/geometry/triangle_mesh.hpp"
+
+namespace grainlight {
+
+/// A sphere (center, radius > 0); outward normal.
+template <std::floating_point F>
+struct SphereShape {
+    Vec3<F> center{F(0)};
+    F radius = F(1);
+
+    SphereShape() = default;
+    SphereShape(const Vec3<F>& c, F r) : center(c), radius(r) {
+        check_argument(std::isfinite(r) && r > F(0), "SphereShape", "radius", r, "(0, inf)");
+    }
+    [[nodiscard]] bool intersect(const Ray<F>& r, F& t, Vec3<F>& n) const noexcept {
+        if (!intersect_sphere_first(r.o, r.d, center, radius, F(0), r.t_max, t)) return false;
+        n = sphere_normal(r(t), center);
+        return true;
+    }
+    [[nodiscard]] F area() const noexcept { return F(4) * pi_v<F> * radius * radius; }
+};
+
+/// An axis-aligned box [lo, hi] (hi > lo in every axis); outward face normals.
+template <std::floating_point F>
+struct BoxShape {
+    Vec3<F> lo{F(-1)}, hi{F(1)};
+
+    BoxShape() = default;
+    BoxShape(const Vec3<F>& lo_, const Vec3<F>& hi_) : lo(lo_), hi(hi_) {
+        for (int a = 0; a < 3; ++a)
+            check_argument(std::isfinite(hi[a] - lo[a]) && hi[a] > lo[a], "BoxShape", "hi - lo", hi[a] - lo[a],
+                           "(0, inf) on every axis");
+    }
+    [[nodiscard]] bool intersect(const Ray<F>& r, F& t, Vec3<F>& n) const noexcept {
+        F t0 = -std::numeric_limits<F>::infinity(), t1 = std::numeric_limits<F>::infinity();
+        int a0 = -1, a1 = -1;
+        for (int a = 0; a < 3; ++a) {
+            if (r.d[a] == F(0)) {
+                if (r.o[a] < lo[a] || r.o[a] > hi[a]) return false;
+                continue;
+            }
+            const F inv = F(1) / r.d[a];
+            F tn = (lo[a] - r.o[a]) * inv, tf = (hi[a] - r.o[a]) * inv;
+            if (tn > tf) std::swap(tn, tf);
+            if (tn > t0) {
+                t0 = tn;
+                a0 = a;
+            }
+            if (tf < t1) {
+                t1 = tf;
+                a1 = a;
+            }
+        }
+        if (t0 > t1) return false;
+        int axis;
+        if (t0 > F(0) && t0 < r.t_max) {
+            t = t0;
+            axis = a0;
+        } else if (t1 > F(0) && t1 < r.t_max) {
+            t = t1;
+            axis = a1;
+        } else {
+            return false;
+        }
+        if (axis < 0) return false;
+        const Vec3<F> p = r(t);
+        n = Vec3<F>(F(0));
+        n[axis] = std::abs(p[axis] - lo[axis]) < std::abs(p[axis] - hi[axis]) ? F(-1) : F(1);
+        return true;
+    }
+    [[nodiscard]] F area() const noexcept {
+        const Vec3<F> e = hi - lo;
+        return F(2) * (e.x * e.y + e.y * e.z + e.z * e.x);
+    }
+};
+
+/// A parallelogram corner + s edge_u + t edge_v, (s, t) in [0, 1]^2; normal
+/// cross(edge_u, edge_v) normalized (the emitting side of a quad light).
+template <std::floating_point F>
+struct QuadShape {
+    Vec3<F> corner{F(0)}, edge_u{F(1), F(0), F(0)}, edge_v{F(0), F(1), F(0)};
+    Vec3<F> normal{F(0), F(0), F(1)};
+    F area_ = F(1);
+
+    QuadShape() = default;
+    QuadShape(const Vec3<F>& c, const Vec3<F>& u, const Vec3<F>& v) : corner(c), edge_u(u), edge_v(v) {
+        const Vec3<F> cr = glm::cross(u, v);
+        area_ = glm::length(cr);
+        check_argument(std::isfinite(area_) && area_ > F(0), "QuadShape", "|edge_u x edge_v|", area_, "(0, inf)");
+        normal = cr / area_;
+    }
+    [[nodiscard]] bool intersect(const Ray<F>& r, F& t, Vec3<F>& n) const noexcept {
+        const F denom = glm::dot(normal, r.d);
+        if (denom == F(0)) return false;
+        const F th = glm::dot(normal, corner - r.o) / denom;
+        if (!(th > F(0) && th < r.t_max)) return false;
+        const Vec3<F> q = r(th) - corner;
+        // Coordinates in the (possibly non-orthogonal) edge basis.
+        const F uu = glm::dot(edge_u, edge_u), uv = glm::dot(edge_u, edge_v), vv = glm::dot(edge_v, edge_v);
+        const F qu = glm::dot(q, edge_u), qv = glm::dot(q, edge_v);
+        const F det = uu * vv - uv * uv;
+        const F s = (qu * vv - qv * uv) / det, tt = (qv * uu - qu * uv) / det;
+        if (s < F(0) || s > F(1) || tt < F(0) || tt > F(1)) return false;
+        t = th;
+        n = normal;
+        return true;
+    }
+    [[nodiscard]] F area() const noexcept { return area_; }
+    /// Point for unit-square sample u (uniform in area; pdf 1 / area).
+    [[nodiscard]] Vec3<F> sample(Vec2<F> u) const noexcept { return corner + u.x * edge_u + u.y * edge_v; }
+};
+
+/// A triangle mesh behind a SAH BVH (geometry/bvh.hpp). Face orientation defines the outside
+/// (counter-clockwise seen from outside). The BVH is shared between copies.
+template <std::floating_point F>
+struct MeshShape {
+    std::shared_ptr<const Bvh<F>> bvh;
+    double area_ = 0;
+
+    MeshShape() = default;
+    /// Build over `mesh` (validated by the BVH build).
+    explicit MeshShape(const TriangleMesh<F>& mesh)
+        : bvh(std::make_shared<const Bvh<F>>(mesh)), area_(mesh.area()) {}
+
+    /// Load a Wavefront OBJ file and place it: v' = scale * v + offset. Throws io_error (naming
+    /// the path) when the file cannot be opened, format_error when it is malformed, and
+    /// invalid_argument for scale <= 0.
+    [[nodiscard]] static MeshShape from_obj(const std::string& path, F scale = F(1), const Vec3<F>& offset = Vec3<F>(F(0))) {
+        check_argument(std::isfinite(scale) && scale > F(0), "MeshShape::from_obj", "scale", scale, "(0, inf)");
+        TriangleMesh<F> mesh = load_obj<F>(path);
+        for (auto& v : mesh.vertices) v = scale * v + offset;
+        mesh.compute_face_normals();
+        return MeshShape(mesh);
+    }
+    [[nodiscard]] bool intersect(const Ray<F>& r, F& t, Vec3<F>& n) const noexcept {
+        const TriangleHit<F> h = bvh->intersect(r.o, r.d, F(0), r.t_max);
+        if (!h) return false;
+        t = h.t;
+        n = h.n_geom;
+        return true;
+    }
+    [[nodiscard]] F area() const noexcept { return F(area_); }
+};
+
+}  // namespace grainlight
