@@ -399,4 +399,43 @@ private:
     std::size_t n_inside_ = 0, n_partial_ = 0;
 };
 
+/// The whole space (an infinite aggregate: Meng15's free-flight and detector-sphere experiments,
+/// Secs. 4.2.2-4.2.3). Its voxelization stores nothing: every voxel is fully inside.
+struct EverywhereBoundary {
+    [[nodiscard]] bool inside(const Vec3d&) const noexcept { return true; }
+    [[nodiscard]] Aabb<double> bounds() const noexcept {
+        constexpr double big = 1e300;
+        return {Vec3d(-big), Vec3d(big)};
+    }
+};
+
+/// Voxelization of the whole space: every voxel inside, no memory. The grid range is +-2^40
+/// tiles around the anchor (a ray is never clipped in practice).
+template <>
+class VoxelizedBoundary<EverywhereBoundary> {
+public:
+    explicit VoxelizedBoundary(EverywhereBoundary shape = {}, double tile_side = 1.0, const Vec3i64& anchor = Vec3i64(0, 0, 0))
+        : shape_(shape), side_(tile_side), anchor_(anchor) {
+        check_argument(std::isfinite(tile_side) && tile_side > 0, "VoxelizedBoundary", "tile_side", tile_side, "(0, inf)");
+    }
+    static constexpr std::int64_t half_range = std::int64_t(1) << 40;
+    [[nodiscard]] const EverywhereBoundary& shape() const noexcept { return shape_; }
+    [[nodiscard]] double tile_side() const noexcept { return side_; }
+    [[nodiscard]] const Vec3i64& anchor() const noexcept { return anchor_; }
+    [[nodiscard]] std::size_t voxel_count() const noexcept { return 0; }
+    [[nodiscard]] std::size_t memory_bytes() const noexcept { return 0; }
+    [[nodiscard]] VoxelClass classify(const Vec3i64&) const noexcept { return VoxelClass::inside; }
+    [[nodiscard]] bool point_inside(const Vec3i64&, const Vec3d&) const noexcept { return true; }
+    [[nodiscard]] Vec3d to_shape_frame(const Vec3i64& tile, const Vec3d& local) const noexcept {
+        return Vec3d(double(tile.x - anchor_.x), double(tile.y - anchor_.y), double(tile.z - anchor_.z)) * side_ + local;
+    }
+    [[nodiscard]] Vec3i64 tile_lo() const noexcept { return anchor_ - Vec3i64(half_range); }
+    [[nodiscard]] Vec3i64 tile_hi() const noexcept { return anchor_ + Vec3i64(half_range); }
+
+private:
+    EverywhereBoundary shape_;
+    double side_;
+    Vec3i64 anchor_;
+};
+
 }  // namespace grainlight
