@@ -1,0 +1,36 @@
+# Extra ctest entries for the precompute area (included from tests/CMakeLists.txt): the
+# grain_stats example's bad-input handling and its JSON line against analytic values.
+if(TARGET grain_stats OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/grain_stats.cpp))
+  set(_gs $<TARGET_FILE:grain_stats>)
+  set(_out ${CMAKE_CURRENT_BINARY_DIR}/grain_stats_out)
+  foreach(r 0 -1 1.5)
+    add_test(NAME grain_stats_bad_radius_${r}
+             COMMAND ${_gs} --shape sphere --material dielectric --grain-radius ${r} --rays 100 --out ${_out})
+    set_tests_properties(grain_stats_bad_radius_${r} PROPERTIES PASS_REGULAR_EXPRESSION "radius = ${r}"
+                         LABELS "example;precompute")
+  endforeach()
+  add_test(NAME grain_stats_bad_shape COMMAND ${_gs} --shape potato --material dielectric --grain-radius 1 --out ${_out})
+  set_tests_properties(grain_stats_bad_shape PROPERTIES WILL_FAIL TRUE LABELS "example;precompute")
+  add_test(NAME grain_stats_bad_preset COMMAND ${_gs} --preset gravel --out ${_out})
+  set_tests_properties(grain_stats_bad_preset PROPERTIES WILL_FAIL TRUE LABELS "example;precompute")
+  # Glass beads (Meng15 Table 1: beta 1.00, lambda_delta 0.00, alpha_s 1.00); lambda_s = 1.424
+  # for ior 1.5 from the deterministic Fresnel series of test_scatterometer.cpp.
+  add_test(NAME grain_stats_json_glass_bead
+           COMMAND ${CMAKE_COMMAND} -DEXE=${_gs} "-DARGS=--preset;glass-bead;--rays;100000;--seed;3;--out;${_out}"
+                   "-DEXPECT=beta=1:0.0001;lambda_delta=0:0.0001;alpha_s=1:0.0001;lambda_s=1.424:0.01"
+                   -P ${CMAKE_CURRENT_SOURCE_DIR}/precompute/check_json.cmake)
+  # Dielectric sphere of radius 0.5: beta = rho^2 = 0.25, lambda_delta = (4/3) sqrt(1 - rho^2) = 1.1547.
+  add_test(NAME grain_stats_json_small_sphere
+           COMMAND ${CMAKE_COMMAND} -DEXE=${_gs}
+                   "-DARGS=--shape;sphere;--material;dielectric;--ior;1.33;--grain-radius;0.5;--rays;100000;--seed;4;--out;${_out}"
+                   "-DEXPECT=beta=0.25:0.006;lambda_delta=1.1547:0.005;alpha_s=1:0.0001"
+                   -P ${CMAKE_CURRENT_SOURCE_DIR}/precompute/check_json.cmake)
+  # Diffuse sphere filling its bounding sphere: alpha_s = albedo, lambda_s = 0, g = -4/9.
+  add_test(NAME grain_stats_json_diffuse_sphere
+           COMMAND ${CMAKE_COMMAND} -DEXE=${_gs}
+                   "-DARGS=--shape;sphere;--material;diffuse;--albedo;0.7;--grain-radius;1;--rays;100000;--seed;5;--out;${_out}"
+                   "-DEXPECT=beta=1:0.0001;alpha_s=0.7:0.01;lambda_s=0:0.0001;g=-0.4444:0.01"
+                   -P ${CMAKE_CURRENT_SOURCE_DIR}/precompute/check_json.cmake)
+  set_tests_properties(grain_stats_json_glass_bead grain_stats_json_small_sphere grain_stats_json_diffuse_sphere
+                       PROPERTIES LABELS "example;precompute")
+endif()
