@@ -1,0 +1,269 @@
+/// @file grainlight/traversal/tiled_packing.hpp
+/// Procedural grain instantiation in a tiled sphere packing: Meng15 Algorithm 1
+/// (INTERSECTGRAINS) and Sec. 3.2 "Ray tracing grains".
+///
+/// The aggregate is the infinite tiling of a PeriodicTile, restricted to the grains whose
+/// bounding-sphere centre lies inside the aggregate boundary (Meng15 footnote 1). The boundary is
+/// seen only through a voxel classifier on the tile grid (one voxel = one tile, Meng15 Sec. 3.2):
+/// `classify(tile)` -> outside / inside / partial and `point_inside(tile, local)` for partial
+/// voxels (geometry/voxelized_boundary.hpp's VoxelizedBoundary models it; UnboundedAggregate is
+/// the whole space). Every sphere gets a deterministic random rotation and exemplar grain from a
+/// hash of (seed, tile index, sphere id) (Meng15 Sec. 3.1 "Randomized instantiation"), and the
+/// grain geometry is intersected by a user-supplied callback in the grain's local frame, so this
+/// header does not depend on any mesh type.
+///
+/// Traversal (Algorithm 1 with our choices):
+/// 1. an Amanatides-Woo DDA (dda.hpp) walks the tile-sized voxels along the ray (64-bit indices);
+///    a voxel is skipped when it and its 26 neighbours are all outside (a sphere whose centre is
+///    in a neighbour can reach up to R < L/2 into the voxel);
+/// 2. inside a voxel's segment, PeriodicTile::first_hit returns the bounding spheres in order;
+///    a sphere is kept if its centre's voxel is inside, or partial and point_inside(centre)
+///    (Algorithm 1 line 9);
+/// 3. the ray is transformed into the grain frame (rotation, then scaling by 1/R so the bounding
+///    sphere is the unit sphere) and passed to the intersector (line 10); without a hit the
+///    search continues from the bounding-sphere exit (line 14).
+/// Bounding spheres are disjoint, so the first grain hit found is the closest one.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <concepts>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "grainlight/core/distribution.hpp"
+#include "grainlight/core/error.hpp"
+#include "grainlight/core/math.hpp"
+#include "grainlight/core/rng.hpp"
+#include "grainlight/core/vector.hpp"
+#include "grainlight/packing/periodic_tile.hpp"
+#include "grainlight/traversal/dda.hpp"
+
+namespace grainlight {
+
+/// A classifier of tile-sized voxels against the aggregate boundary (Meng15 Sec. 3.2): absolute
+/// 64-bit tile index -> an enum with members outside / inside / partial; and, for partial voxels,
+/// whether a point given as (tile, offset from the tile corner in world units) is inside.
+/// Optional: `tile_lo()` / `tile_hi()` (inclusive Vec3i64 range of non-outside voxels), used to
+/// clip rays to the aggregate.
+template <class B>
+concept TileVoxelClassifier = requires(const B& b, const Vec3i64& t, const Vec3d& p) {
+    { b.point_inside(t, p) } -> std::convertible_to<bool>;
+    { b.classify(t) == decltype(b.classify(t))::outside } -> std::convertible_to<bool>;
+    { b.classify(t) == decltype(b.classify(t))::inside } -> std::convertible_to<bool>;
+    { b.classify(t) == decltype(b.classify(t))::partial } -> std::convertible_to<bool>;
+};
+
+/// The whole space is inside the aggregate (an infinite granular medium, e.g. Meng15 Fig. 9).
+struct UnboundedAggregate {
+    enum class Class : std::uint8_t { outside, inside, partial };
+    [[nodiscard]] Class classify(const Vec3i64&) const noexcept { return Class::inside; }
+    [[nodiscard]] bool point_inside(const Vec3i64&, const Vec3d&) const noexcept { return true; }
+};
+
+/// One instantiated grain of the tiling (Meng15 Sec. 3.1 "Randomized instantiation").
+struct GrainInstance {
+    std::uint32_t sphere = 0;      ///< sphere id in the tile
+    Vec3i64 tile{0, 0, 0};         ///< home tile (absolute index) of the bounding sphere
+    Vec3d center{0.0};             ///< bounding-sphere centre in the ray's frame (offset from the
+                                   ///< corner of the ray's origin tile, world units)
+    double radius = 0;             ///< bounding-sphere radius (world units)
+    std::uint32_t exemplar = 0;    ///< exemplar grain index, drawn with the mixing weights
+    std::uint64_t key = 0;         ///< per-grain random key hash(seed, tile, sphere) for further use
+    /// Rotation rows: local = to_local * (world - center) / radius (uniform random rotation).
+    std::array<Vec3d, 3> to_local{Vec3d(1, 0, 0), Vec3d(0, 1, 0), Vec3d(0, 0, 1)};
+    double t_enter = 0, t_exit = 0;  ///< bounding-sphere interval along the ray (ray parameter)
+
+    /// World direction -> grain-local direction (rotation only).
+    [[nodiscard]] Vec3d direction_to_local(const Vec3d& w) const noexcept {
+        return Vec3d(glm::dot(to_local[0], w), glm::dot(to_local[1], w), glm::dot(to_local[2], w));
+    }
+    /// Grain-local direction -> world direction.
+    [[nodiscard]] Vec3d direction_to_world(const Vec3d& l) const noexcept {
+        return l.x * to_local[0] + l.y * to_local[1] + l.z * to_local[2];
+    }
+    /// Point in the ray's frame -> grain-local point (bounding sphere = unit sphere).
+    [[nodiscard]] Vec3d point_to_local(const Vec3d& p) const noexcept { return direction_to_local(p - center) / radius; }
+    /// Grain-local point -> point in the ray's frame.
+    [[nodiscard]] Vec3d point_to_world(const Vec3d& l) const noexcept { return center + radius * direction_to_world(l); }
+};
+
+/// The ray in a grain's local frame: origin o and direction d such that the local point at ray
+/// parameter t is o + t d, with the same t as the world ray (d = to_local * d_world / radius).
+struct GrainRay {
+    Vec3d o{0.0};
+    Vec3d d{0.0, 0.0, 1.0};
+};
+
+/// Result of TiledPacking::intersect.
+struct TiledHit {
+    bool hit = false;
+    double t = std::numeric_limits<double>::infinity();  ///< ray parameter of the grain hit
+    GrainInstance grain{};                                 ///< the grain hit
+    explicit operator bool() const noexcept { return hit; }
+};
+
+/// Counters for benchmarks and tests.
+struct TiledTraversalStats {
+    std::uint64_t voxels_visited = 0;   ///< voxels stepped through by the DDA
+    std::uint64_t voxels_skipped = 0;   ///< of those, skipped as outside (with their neighbours)
+    std::uint64_t spheres_tested = 0;   ///< bounding spheres hit by the ray
+    std::uint64_t grains_tested = 0;    ///< intersector calls
+};
+
+/// A grain intersector: `bool(const GrainInstance& g, const GrainRay& r, double t0, double t1,
+/// double& t_hit)`: intersect exemplar g.exemplar with r for t in [t0, t1]; on a hit set t_hit
+/// and return true. It may record more (normal, triangle) in its own state.
+template <class I>
+concept GrainIntersector = requires(I& fn, const GrainInstance& g, const GrainRay& r, double t, double& th) {
+    { fn(g, r, t, t, th) } -> std::convertible_to<bool>;
+};
+
+/// Meng15's procedural granular aggregate: a tile, a boundary classifier, exemplar mixing weights
+/// and a seed. Immutable after construction; queries are const and thread-safe.
+template <TileVoxelClassifier Boundary = UnboundedAggregate>
+class TiledPacking {
+public:
+    /// `mixing_weights[i]` >= 0 is the relative frequency of exemplar i (sum > 0).
+    /// Throws grainlight::invalid_argument for empty or invalid weights.
+    TiledPacking(PeriodicTile tile, Boundary boundary, std::vector<double> mixing_weights = {1.0},
+                 std::uint64_t seed = 0)
+        : tile_(std::move(tile)),
+          boundary_(std::move(boundary)),
+          weights_(std::move(mixing_weights)),
+          mix_(std::span<const double>(weights_)),
+          seed_(seed) {}
+
+    [[nodiscard]] const PeriodicTile& tile() const noexcept { return tile_; }
+    [[nodiscard]] const Boundary& boundary() const noexcept { return boundary_; }
+    [[nodiscard]] std::size_t exemplar_count() const noexcept { return weights_.size(); }
+    [[nodiscard]] std::uint64_t seed() const noexcept { return seed_; }
+
+    /// Is the grain (sphere, home tile) part of the aggregate (its centre inside the boundary)?
+    [[nodiscard]] bool contains(std::uint32_t sphere, const Vec3i64& tile) const noexcept {
+        const auto c = boundary_.classify(tile);
+        using C = decltype(c);
+        if (c == C::inside) return true;
+        if (c == C::outside) return false;
+        return boundary_.point_inside(tile, tile_.center(sphere));
+    }
+
+    /// The deterministic instance of sphere `sphere` in home tile `tile`: rotation (uniform,
+    /// Shoemake 1992 "Uniform random rotations", Graphics Gems III) and exemplar from a hash of
+    /// (seed, tile, sphere). `center` is given relative to the corner of tile `frame`.
+    [[nodiscard]] GrainInstance instance(std::uint32_t sphere, const Vec3i64& tile,
+                                         const Vec3i64& frame = Vec3i64(0, 0, 0)) const noexcept {
+        GrainInstance g;
+        g.sphere = sphere;
+        g.tile = tile;
+        g.radius = tile_.radius();
+        const double L = tile_.side();
+        g.center = Vec3d(double(tile.x - frame.x), double(tile.y - frame.y), double(tile.z - frame.z)) * L +
+                   tile_.center(sphere);
+        g.key = hash_words(seed_, std::uint64_t(tile.x), std::uint64_t(tile.y), std::uint64_t(tile.z), sphere);
+        Rng rng = Rng::from_key(g.key);
+        const double u1 = rng.uniform<double>(), u2 = rng.uniform<double>(), u3 = rng.uniform<double>();
+        const double s1 = std::sqrt(1 - u1), s2 = std::sqrt(u1);
+        const double a = 2 * pi_v<double> * u2, b = 2 * pi_v<double> * u3;
+        const double x = s1 * std::sin(a), y = s1 * std::cos(a), z = s2 * std::sin(b), w = s2 * std::cos(b);
+        // Rotation matrix of the unit quaternion (w, x, y, z), rows.
+        g.to_local[0] = Vec3d(1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y));
+        g.to_local[1] = Vec3d(2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x));
+        g.to_local[2] = Vec3d(2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y));
+        g.exemplar = weights_.size() > 1 ? std::uint32_t(mix_.sample(rng.uniform<double>())) : 0u;
+        return g;
+    }
+
+    /// Meng15 Algorithm 1: first grain hit along o + t d, t in [t_min, t_max]; the origin is
+    /// (origin_tile, local_origin) as in PeriodicTile::first_hit and grain centres are reported
+    /// in that frame. `grain` is the GrainIntersector. With t_max = inf the ray is clipped to the
+    /// classifier's tile range if it has one, else to tile().max_search_distance().
+    template <class Intersector>
+        requires GrainIntersector<std::remove_reference_t<Intersector>>
+    [[nodiscard]] TiledHit intersect(const Vec3i64& origin_tile, const Vec3d& local_origin, const Vec3d& d,
+                                     double t_min, double t_max, Intersector&& grain,
+                                     TiledTraversalStats* stats = nullptr) const {
+        TiledHit result;
+        const double dlen = std::sqrt(glm::dot(d, d));
+        if (!(dlen > 0) || !(t_min <= t_max)) return result;
+        const double L = tile_.side();
+        if constexpr (requires { boundary_.tile_lo(); boundary_.tile_hi(); }) {
+            const Vec3i64 lo = boundary_.tile_lo(), hi = boundary_.tile_hi();
+            const Vec3d blo = Vec3d(double(lo.x - 1 - origin_tile.x), double(lo.y - 1 - origin_tile.y),
+                                    double(lo.z - 1 - origin_tile.z)) * L;
+            const Vec3d bhi = Vec3d(double(hi.x + 2 - origin_tile.x), double(hi.y + 2 - origin_tile.y),
+                                    double(hi.z + 2 - origin_tile.z)) * L;
+            if (!clip_to_box(local_origin, d, blo, bhi, t_min, t_max)) return result;
+        } else {
+            t_max = std::min(t_max, t_min + tile_.max_search_distance() / dlen);
+        }
+        double cursor = t_min;  // everything before this parameter has been processed
+        for (GridDda<double> dda(origin_tile, local_origin, d, Vec3d(L), t_min, t_max); !dda.done(); dda.step()) {
+            if (stats) ++stats->voxels_visited;
+            const Vec3i64 v = dda.cell();
+            if (!needs_processing(v)) {
+                if (stats) ++stats->voxels_skipped;
+                continue;
+            }
+            const double seg_end = dda.t_exit();
+            double s = std::max(cursor, dda.t_enter());
+            while (s <= seg_end) {
+                const TileHit h = tile_.first_hit(origin_tile, local_origin, d, s, seg_end);
+                if (!h) break;
+                if (stats) ++stats->spheres_tested;
+                cursor = h.t_exit;
+                if (contains(h.sphere, h.tile)) {
+                    GrainInstance g = instance(h.sphere, h.tile, origin_tile);
+                    g.t_enter = h.t_enter;
+                    g.t_exit = h.t_exit;
+                    GrainRay r;
+                    r.o = g.point_to_local(local_origin);
+                    r.d = g.direction_to_local(d) / g.radius;
+                    const double t0 = std::max(t_min, h.t_enter), t1 = std::min(t_max, h.t_exit);
+                    double t_hit = std::numeric_limits<double>::infinity();
+                    if (stats) ++stats->grains_tested;
+                    if (t0 <= t1 && grain(g, r, t0, t1, t_hit)) {
+                        result.hit = true;
+                        result.t = t_hit;
+                        result.grain = g;
+                        return result;
+                    }
+                }
+                s = cursor;
+            }
+        }
+        return result;
+    }
+
+    /// intersect() for a ray in world coordinates (tile 0 frame).
+    template <std::floating_point F, class Intersector>
+        requires GrainIntersector<std::remove_reference_t<Intersector>>
+    [[nodiscard]] TiledHit intersect(const Ray<F>& ray, F t_min, F t_max, Intersector&& grain) const {
+        return intersect(Vec3i64(0, 0, 0), Vec3d(ray.o), Vec3d(ray.d), double(t_min), double(t_max),
+                         std::forward<Intersector>(grain));
+    }
+
+private:
+    /// A voxel is traversed unless it and its 26 neighbours are outside.
+    [[nodiscard]] bool needs_processing(const Vec3i64& v) const noexcept {
+        using C = decltype(boundary_.classify(v));
+        if (!(boundary_.classify(v) == C::outside)) return true;
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx)
+                    if (!(boundary_.classify(Vec3i64(v.x + dx, v.y + dy, v.z + dz)) == C::outside)) return true;
+        return false;
+    }
+
+    PeriodicTile tile_;
+    Boundary boundary_;
+    std::vector<double> weights_;
+    DiscreteDistribution<double> mix_;
+    std::uint64_t seed_;
+};
+
+}  // namespace grainlight
