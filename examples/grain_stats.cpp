@@ -133,6 +133,8 @@ int main(int argc, char** argv) {
             std::printf("  channel %zu: alpha_s = %.4f +- %.4f, lambda_s = %.4f +- %.4f (signed %+.4f), g = %.4f\n", c,
                         stats.alpha_s(c), stats.alpha_s_stderr(c), stats.lambda_s(c), stats.teleport_along_stderr(c),
                         stats.teleport_along(c), stats.g(c));
+        std::printf("  terminated (bounce limit or mesh leak, counted as absorbed): %.2g %.2g %.2g\n", stats.terminated[0],
+                    stats.terminated[1], stats.terminated[2]);
         if (!grain.paper_column.empty()) std::printf("  (Meng15 Table 1 column: %s; see meng15_table1_grain_stats)\n", grain.paper_column.c_str());
         std::printf("  wrote %s, %s\n", (out / (stem + ".scat")).c_str(), csv_path.c_str());
         Json j;
