@@ -43,7 +43,7 @@ bool ray_sphere(const Vec3d& o, const Vec3d& d, const Vec3d& c, double r, double
 // The intersector under test: works in the grain's local frame.
 struct LocalGrains {
     int calls = 0;
-    bool operator()(const GrainInstance& g, const GrainRay& r, double t0, double t1, double& t) {
+    bool operator()(const TiledGrain& g, const GrainRay& r, double t0, double t1, double& t) {
         ++calls;
         return ray_sphere(r.o, r.d, grain_center[g.exemplar], grain_radius[g.exemplar], t0, t1, t);
     }
@@ -87,7 +87,7 @@ TiledHit brute_force(const Packing& pk, InsideFn&& inside_world, const Vec3d& o,
                     const Vec3i64 t(x, y, z);
                     const Vec3d c = Vec3d(t) * tile.side() + tile.center(s);
                     if (!inside_world(c)) continue;
-                    const GrainInstance g = pk.instance(s, t + frame, frame);
+                    const TiledGrain g = pk.instance(s, t + frame, frame);
                     const Vec3d gc = c + tile.radius() * g.direction_to_world(grain_center[g.exemplar]);
                     double th;
                     if (ray_sphere(o, d, gc, tile.radius() * grain_radius[g.exemplar], t_min, t_max, th) &&
@@ -113,7 +113,7 @@ TEST_CASE("grain instances: proper uniform rotations, exemplar frequencies, dete
     double n1 = 0;
     const int n = 20000;
     for (int i = 0; i < n; ++i) {
-        const GrainInstance g = pk.instance(std::uint32_t(i % 40), Vec3i64(i / 40, -i, 3));
+        const TiledGrain g = pk.instance(std::uint32_t(i % 40), Vec3i64(i / 40, -i, 3));
         const auto& R = g.to_local;
         for (int a = 0; a < 3; ++a)
             for (int b = 0; b < 3; ++b) REQUIRE(glm::dot(R[a], R[b]) == Approx(a == b ? 1.0 : 0.0).margin(1e-12));

@@ -66,7 +66,7 @@ struct UnboundedAggregate {
 };
 
 /// One instantiated grain of the tiling (Meng15 Sec. 3.1 "Randomized instantiation").
-struct GrainInstance {
+struct TiledGrain {
     std::uint32_t sphere = 0;      ///< sphere id in the tile
     Vec3i64 tile{0, 0, 0};         ///< home tile (absolute index) of the bounding sphere
     Vec3d center{0.0};             ///< bounding-sphere centre in the ray's frame (offset from the
@@ -103,7 +103,7 @@ struct GrainRay {
 struct TiledHit {
     bool hit = false;
     double t = std::numeric_limits<double>::infinity();  ///< ray parameter of the grain hit
-    GrainInstance grain{};                                 ///< the grain hit
+    TiledGrain grain{};                                 ///< the grain hit
     explicit operator bool() const noexcept { return hit; }
 };
 
@@ -115,11 +115,11 @@ struct TiledTraversalStats {
     std::uint64_t grains_tested = 0;    ///< intersector calls
 };
 
-/// A grain intersector: `bool(const GrainInstance& g, const GrainRay& r, double t0, double t1,
+/// A grain intersector: `bool(const TiledGrain& g, const GrainRay& r, double t0, double t1,
 /// double& t_hit)`: intersect exemplar g.exemplar with r for t in [t0, t1]; on a hit set t_hit
 /// and return true. It may record more (normal, triangle) in its own state.
 template <class I>
-concept GrainIntersector = requires(I& fn, const GrainInstance& g, const GrainRay& r, double t, double& th) {
+concept GrainIntersector = requires(I& fn, const TiledGrain& g, const GrainRay& r, double t, double& th) {
     { fn(g, r, t, t, th) } -> std::convertible_to<bool>;
 };
 
@@ -155,9 +155,9 @@ public:
     /// The deterministic instance of sphere `sphere` in home tile `tile`: rotation (uniform,
     /// Shoemake 1992 "Uniform random rotations", Graphics Gems III) and exemplar from a hash of
     /// (seed, tile, sphere). `center` is given relative to the corner of tile `frame`.
-    [[nodiscard]] GrainInstance instance(std::uint32_t sphere, const Vec3i64& tile,
+    [[nodiscard]] TiledGrain instance(std::uint32_t sphere, const Vec3i64& tile,
                                          const Vec3i64& frame = Vec3i64(0, 0, 0)) const noexcept {
-        GrainInstance g;
+        TiledGrain g;
         g.sphere = sphere;
         g.tile = tile;
         g.radius = tile_.radius();
@@ -217,7 +217,7 @@ public:
                 if (stats) ++stats->spheres_tested;
                 cursor = h.t_exit;
                 if (contains(h.sphere, h.tile)) {
-                    GrainInstance g = instance(h.sphere, h.tile, origin_tile);
+                    TiledGrain g = instance(h.sphere, h.tile, origin_tile);
                     g.t_enter = h.t_enter;
                     g.t_exit = h.t_exit;
                     GrainRay r;
