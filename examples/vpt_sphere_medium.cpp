@@ -46,8 +46,9 @@ int main(int argc, char** argv) {
         using Medium = gl::ContinuousMedium<Phase, gl::RGB>;
         using Scene = gl::Scene<Medium>;
         Scene scene;
-        // A milky, slightly blue-scattering medium: optical radius ~ 4-8 per channel, g = 0.6.
-        const int milk = scene.add_medium(Medium(gl::RGB{4.0f, 5.5f, 8.0f}, gl::RGB{0.98f, 0.985f, 0.99f}, Phase(0.6f)));
+        // A milky, slightly blue medium: optical radius 3-3.8 per channel (near-grey sigma_t keeps the
+        // spectral free-flight weights near 1), blue-favouring albedo, g = 0.5.
+        const int milk = scene.add_medium(Medium(gl::RGB{3.0f, 3.3f, 3.8f}, gl::RGB{0.95f, 0.97f, 0.99f}, Phase(0.5f)));
         scene.add_shape(gl::QuadShape<float>(gl::Vec3f(-6, 0, -6), gl::Vec3f(0, 0, 12), gl::Vec3f(12, 0, 0)),
                         gl::Material<float, gl::RGB>::diffuse(gl::RGB{0.55f, 0.5f, 0.45f}));
         scene.add_shape(gl::SphereShape<float>(gl::Vec3f(0, 1, 0), 1.0f), gl::Material<float, gl::RGB>::dielectric(ior),
