@@ -169,8 +169,11 @@ TEST_CASE("box query agrees with brute force over explicit tile copies", "[tile]
         for (int k = 0; k < 60; ++k) {
             Vec3d lo(rng.uniform<double>() * 4 - 2, rng.uniform<double>() * 4 - 2, rng.uniform<double>() * 4 - 2);
             const Vec3d ext(rng.uniform<double>() * 1.3, rng.uniform<double>() * 0.7, rng.uniform<double>() * 1.1);
+            const double h = tile.side() / double(tile.grid_resolution());
             if (k == 0) lo = Vec3d(0.0);  // exactly on tile and cell boundaries
-            const Vec3d hi = lo + (k == 0 ? Vec3d(1.0) : ext);
+            if (k >= 1 && k < 12) lo = Vec3d(double(k - 6), double(2 * k - 13), double(-k)) * h;  // cell boundaries
+            Vec3d hi = lo + (k == 0 ? Vec3d(1.0) : ext);
+            if (k >= 1 && k < 6) hi = lo + Vec3d(double(k)) * h;  // upper faces on cell boundaries too
             std::set<Key> fast, brute;
             for (const auto& r : tile.spheres_overlapping(lo, hi)) {
                 CHECK(fast.insert(Key{r.sphere, r.tile.x, r.tile.y, r.tile.z}).second);  // no duplicates

@@ -237,10 +237,13 @@ public:
     template <class Fn>
     void for_each_overlapping(const Vec3d& lo, const Vec3d& hi, Fn&& fn) const {
         if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) return;
+        // Cells overlapping the box, widened by a round-off margin so the reference cell
+        // (computed in the sphere's home frame below) is always visited.
         std::array<std::int64_t, 3> g0{}, g1{};
         for (int a = 0; a < 3; ++a) {
-            g0[a] = detail::floor_i64(lo[a] / h_) - 1;
-            g1[a] = detail::floor_i64(hi[a] / h_) + 1;
+            const double eps = 1e-7 * h_ + 1e-12 * (std::abs(lo[a]) + std::abs(hi[a]));
+            g0[a] = detail::floor_i64((lo[a] - eps) / h_);
+            g1[a] = detail::floor_i64((hi[a] + eps) / h_);
         }
         const double r2 = radius_ * radius_;
         for (std::int64_t gz = g0[2]; gz <= g1[2]; ++gz)
@@ -424,7 +427,7 @@ private:
     }
 
     void build_grid(double cell_size_in_radii) {
-        const double target = std::max(cell_size_in_radii * radius_, side_ / 512);
+        const double target = std::max(cell_size_in_radii * radius_, side_ / 256);  // <= 256^3 cells
         m_ = static_cast<std::int64_t>(std::max(1.0, std::floor(side_ / target)));
         h_ = side_ / double(m_);
         const auto ncell = static_cast<std::size_t>(m_ * m_ * m_);
