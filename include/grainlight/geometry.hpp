@@ -1,6 +1,6 @@
 /// @file grainlight/geometry.hpp
-/// Umbrella header of the geometry layer: boxes, transforms, spheres, triangle meshes, the BVH
-/// and procedural grains.
+/// Umbrella header of the geometry layer: boxes, transforms, spheres, triangle meshes, the BVH,
+/// procedural grains and the voxelized aggregate boundary (Meng15 Sec. 3.2).
 #pragma once
 
 #include "grainlight/geometry/aabb.hpp"
@@ -9,3 +9,4 @@
 #include "grainlight/geometry/sphere.hpp"
 #include "grainlight/geometry/transform.hpp"
 #include "grainlight/geometry/triangle_mesh.hpp"
+#include "grainlight/geometry/voxelized_boundary.hpp"

@@ -5,7 +5,10 @@
 #pragma once
 
 #include <array>
+#include <charconv>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <concepts>
 #include <cstdint>
 #include <fstream>
@@ -118,18 +121,25 @@ struct TriangleMesh {
 };
 
 namespace detail {
+/// Throw an error of type E (grainlight::format_error, io_error, ...) with `msg`; in builds
+/// without exceptions print it and abort (like raise_invalid_argument in core/error.hpp).
+template <class E>
+[[noreturn]] inline void raise_error(const std::string& msg) {
+#if defined(__cpp_exceptions) || defined(__EXCEPTIONS)
+    throw E(msg);
+#else
+    std::fputs(("grainlight: " + msg + "\n").c_str(), stderr);
+    std::abort();
+#endif
+}
+
 /// Parse a 1-based (or negative, relative) OBJ index; returns false on malformed text.
 inline bool parse_obj_index(const std::string& tok, std::size_t n_vertices, std::uint32_t& out) {
     const std::string head = tok.substr(0, tok.find('/'));
     if (head.empty()) return false;
-    std::size_t pos = 0;
     long long idx = 0;
-    try {
-        idx = std::stoll(head, &pos);
-    } catch (...) {
-        return false;
-    }
-    if (pos != head.size() || idx == 0) return false;
+    const auto [ptr, ec] = std::from_chars(head.data(), head.data() + head.size(), idx);
+    if (ec != std::errc() || ptr != head.data() + head.size() || idx == 0) return false;
     const long long resolved = idx > 0 ? idx - 1 : static_cast<long long>(n_vertices) + idx;
     if (resolved < 0 || resolved >= static_cast<long long>(n_vertices)) return false;
     out = static_cast<std::uint32_t>(resolved);
@@ -144,12 +154,12 @@ inline bool parse_obj_index(const std::string& tok, std::size_t n_vertices, std:
 template <std::floating_point F = float>
 [[nodiscard]] TriangleMesh<F> load_obj(const std::string& path) {
     std::ifstream in(path);
-    if (!in) throw io_error("load_obj: cannot open '" + path + "'");
+    if (!in) detail::raise_error<io_error>("load_obj: cannot open '" + path + "'");
     TriangleMesh<F> mesh;
     std::string line;
     std::size_t line_no = 0;
     auto fail = [&](const std::string& what) {
-        throw format_error("load_obj: '" + path + "' line " + std::to_string(line_no) + ": " + what);
+        detail::raise_error<format_error>("load_obj: '" + path + "' line " + std::to_string(line_no) + ": " + what);
     };
     while (std::getline(in, line)) {
         ++line_no;
@@ -175,8 +185,8 @@ template <std::floating_point F = float>
             for (std::size_t k = 1; k + 1 < idx.size(); ++k) mesh.triangles.push_back({idx[0], idx[k], idx[k + 1]});
         }
     }
-    if (in.bad()) throw io_error("load_obj: read error on '" + path + "'");
-    if (mesh.triangles.empty()) throw format_error("load_obj: '" + path + "' contains no faces");
+    if (in.bad()) detail::raise_error<io_error>("load_obj: read error on '" + path + "'");
+    if (mesh.triangles.empty()) detail::raise_error<format_error>("load_obj: '" + path + "' contains no faces");
     mesh.compute_face_normals();
     return mesh;
 }

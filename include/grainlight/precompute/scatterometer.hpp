@@ -92,6 +92,12 @@ struct ScatterometerGrid {
         check_argument(tt_cells() <= (std::size_t(1) << 24), w, "tt cells", tt_cells(), "<= 2^24");
         check_argument(chord_bins >= 1 && chord_bins <= 100000, w, "chord_bins", chord_bins, "[1, 100000]");
     }
+    /// Non-throwing form of validate() for loaders: true if every bin count is in range.
+    [[nodiscard]] bool valid() const noexcept {
+        return phase_bins >= 2 && phase_bins <= 100000 && tt_mu_bins >= 1 && tt_mu_bins <= 1024 && tt_along_bins >= 1 &&
+               tt_along_bins <= 1024 && tt_across_bins >= 1 && tt_across_bins <= 1024 &&
+               tt_cells() <= (std::size_t(1) << 24) && chord_bins >= 1 && chord_bins <= 100000;
+    }
     /// Bin of cos theta on a grid uniform in theta with n bins, ordered by increasing cos theta
     /// (bin 0 = backward). Edges: mu_k = cos(pi (n - k) / n).
     [[nodiscard]] static std::uint32_t mu_bin(double mu, std::uint32_t n) noexcept {
@@ -197,12 +203,8 @@ struct GrainStats {
     /// Check internal consistency (sizes, ranges, sums); throws grainlight::format_error with
     /// `context` (used by the loader) on any violation.
     void check_consistency(const std::string& context) const {
-        auto fail = [&](const std::string& what) { throw format_error(context + ": " + what); };
-        try {
-            grid.validate();
-        } catch (const invalid_argument& e) {
-            fail(std::string("bad grid: ") + e.what());
-        }
+        auto fail = [&](const std::string& what) { detail::raise_error<format_error>(context + ": " + what); };
+        if (!grid.valid()) fail("bad grid (bin counts out of range)");
         if (chord_hist.size() != grid.chord_bins) fail("chord histogram size mismatch");
         const double tol = 1e-9;
         auto prob = [&](double p, const char* name) {
@@ -657,11 +659,7 @@ inline constexpr std::uint32_t grain_stats_version = 1;
     g.tt_along_bins = r.get<std::uint32_t>();
     g.tt_across_bins = r.get<std::uint32_t>();
     g.chord_bins = r.get<std::uint32_t>();
-    try {
-        g.validate();
-    } catch (const invalid_argument& e) {
-        r.fail(std::string("bad grid: ") + e.what());
-    }
+    if (!g.valid()) r.fail("bad grid (bin counts out of range)");
     s.rays = r.get<std::uint64_t>();
     s.hit = r.get<double>();
     s.miss_chord = r.get<double>();
