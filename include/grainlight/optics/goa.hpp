@@ -41,6 +41,7 @@
 #include <cmath>
 #include <complex>
 #include <cstddef>
+#include <span>
 #include <vector>
 
 #include <boost/math/special_functions/bessel.hpp>
@@ -421,10 +422,63 @@ private:
     GoaRaySolver solver_;
 };
 
+/// GOA rays cached for a fixed set of scattering angles. The rays (incidence angles, Fresnel
+/// factors, focal phases) depend on the index and the angle only, so a table built once serves
+/// every radius: evaluating a new size parameter costs one complex exponential per ray plus the
+/// diffraction term per angle (the bulk integration over a PSD, optics/bulk.hpp, relies on it).
+class GoaTable {
+public:
+    /// theta: angles in [0, pi] [rad] (any order).
+    GoaTable(std::complex<double> m, int p_max, std::span<const double> theta)
+        : theta_(theta.begin(), theta.end()) {
+        const GoaRaySolver solver(m, p_max);
+        offsets_.reserve(theta_.size() + 1);
+        offsets_.push_back(0);
+        for (double t : theta_) {
+            check_argument(t >= 0 && t <= detail::goa_pi, "GoaTable", "theta", t, "[0, pi]");
+            solver.rays(t, [&](const GoaRay& r) { rays_.push_back(r); });
+            offsets_.push_back(rays_.size());
+        }
+    }
+    [[nodiscard]] std::size_t size() const noexcept { return theta_.size(); }
+    [[nodiscard]] std::span<const double> theta() const noexcept { return theta_; }
+    /// Rays at angle index i.
+    [[nodiscard]] std::span<const GoaRay> rays(std::size_t i) const noexcept {
+        return std::span<const GoaRay>(rays_).subspan(offsets_[i], offsets_[i + 1] - offsets_[i]);
+    }
+    /// S1, S2 at angle index i for size parameter alpha (Eq. 11).
+    [[nodiscard]] ScatteringAmplitudes amplitudes(double alpha, std::size_t i, bool diffraction = true) const {
+        ScatteringAmplitudes s{0.0, 0.0};
+        for (const GoaRay& r : rays(i)) {
+            const auto a = r.amplitudes(alpha);
+            s.S1 += a.S1;
+            s.S2 += a.S2;
+        }
+        if (diffraction && theta_[i] < 0.5 * detail::goa_pi) {
+            const double sd = fraunhofer_amplitude(alpha, theta_[i]);
+            s.S1 += sd;
+            s.S2 += sd;
+        }
+        return s;
+    }
+    /// |S1|^2 + |S2|^2 at every angle, into out (out.size() >= size()).
+    void intensities(double alpha, std::span<double> out, bool diffraction = true) const {
+        for (std::size_t i = 0; i < theta_.size(); ++i) {
+            const auto s = amplitudes(alpha, i, diffraction);
+            out[i] = std::norm(s.S1) + std::norm(s.S2);
+        }
+    }
+
+private:
+    std::vector<double> theta_;
+    std::vector<GoaRay> rays_;
+    std::vector<std::size_t> offsets_;
+};
+
 /// Angular moments of the GOA intensity, I_k = int_{-1}^{1} (|S1|^2 + |S2|^2) mu^k dmu for k = 0, 1
 /// (so the numerically integrated Qsca = I_0 / alpha^2 and g = I_1 / I_0). Quadrature in theta:
 /// 4-point Gauss panels of width 0.25/alpha over the diffraction peak (theta < 20/alpha), then
-/// panels of width max(2/alpha, pi/20000) (interference fringes beyond are averaged, not resolved).
+/// panels of width max(1/alpha, pi/40000) (4 nodes per fringe period pi/alpha up to alpha ~ 1e4).
 struct GoaMoments {
     double i0 = 0, i1 = 0;
 };
@@ -448,7 +502,7 @@ struct GoaMoments {
     // Split at 90 deg (diffraction is cut there, Eq. 11).
     for (auto [lo, hi] : {std::pair{peak, 0.5 * pi}, std::pair{0.5 * pi, pi}}) {
         if (hi <= lo) continue;
-        const double h = std::max(2.0 / a, pi / 20000);
+        const double h = std::max(1.0 / a, pi / 40000);
         const int n = std::max(1, int(std::ceil((hi - lo) / h)));
         for (int i = 0; i < n; ++i) panel(lo + (hi - lo) * i / n, lo + (hi - lo) * (i + 1) / n);
     }
