@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
         const auto out = cli.out_dir();
         const std::uint64_t seed = cli.seed();
         const int threads = cli.threads();
+        (void)threads;  // used by the OpenMP pragma only
         const double f_target = 0.63;  // Meng15 Fig. 6: "The packing rate is f = 0.63"
         const std::size_t n = full ? 8000 : 2000;
         const int blocks = 64;

@@ -48,6 +48,7 @@ int main(int argc, char** argv) {
         const std::uint64_t seed = cli.seed();
         const bool full = cli.full_quality();
         const int threads = cli.threads();
+        (void)threads;  // used by the OpenMP pragma only
         const std::string out_file = cli.str("out", "");
 
         // ---- pack (progress: rate reached so far) ---------------------------------------------
