@@ -1,0 +1,234 @@
+// guo21_fig6_error_runtime: Guo21 Fig. 6. Left: the error of F = (|S1| + |S2|)/2, GOA (p <= 3)
+// vs exact Lorenz-Mie, as a function of r for several relative indices, by three error measures:
+//   relmse  = mean over angles of ((F_goa - F_mie) / F_mie)^2        (per-angle relative MSE)
+//   energy  = sum (F_goa - F_mie)^2 / sum F_mie^2                    (energy-weighted sum ratio)
+//   logerr  = mean over angles of (log10 F_goa - log10 F_mie)^2      (log error)
+// at 1-degree steps 0..180 deg, lambda = 0.6 um. Right: the runtime ratio t_Mie / t_GOA for the
+// same 181 angles, measured side by side in this run (minimum of repeated, interleaved timings),
+// from r = 1 to 1000 um; GOA both solving its rays per call and with rays cached per angle grid
+// (optics/goa.hpp GoaTable, as the bulk integration uses it).
+//
+//   guo21_fig6_error_runtime [--quality quick|full] [--out DIR] [--threads T]
+//
+// Paper: "GOA exhibits errors of less than 0.01 compared with exact Lorenz-Mie calculations when
+// r >= 2 um" and "t_Mie/t_GOA grows linearly with r ... two orders of magnitude".
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <complex>
+#include <cstdio>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "common/cli.hpp"
+#include "common/output.hpp"
+#include "common/progress.hpp"
+#include "grainlight/optics/goa.hpp"
+#include "grainlight/optics/lorenz_mie.hpp"
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kLambda = 0.6;
+
+struct Err {
+    double relmse = 0, energy = 0, logerr = 0;
+};
+
+Err errors(double eta, double r) {
+    const double x = 2 * kPi * r / kLambda;
+    const std::complex<double> m(eta, 0);
+    const grainlight::LorenzMie mie(m, x);
+    const grainlight::Goa goa(m, x);
+    Err e;
+    double num = 0, den = 0;
+    for (int d = 0; d <= 180; ++d) {
+        const double th = d * kPi / 180;
+        const auto sm = mie.amplitudes(d == 0 ? 1.0 : d == 180 ? -1.0 : std::cos(th));
+        const auto sg = goa.amplitudes_at_angle(th);
+        const double fm = 0.5 * (std::abs(sm.S1) + std::abs(sm.S2));
+        const double fg = 0.5 * (std::abs(sg.S1) + std::abs(sg.S2));
+        e.relmse += (fg - fm) * (fg - fm) / (fm * fm);
+        num += (fg - fm) * (fg - fm);
+        den += fm * fm;
+        const double lg = std::log10(std::max(fg, 1e-300)) - std::log10(std::max(fm, 1e-300));
+        e.logerr += lg * lg;
+    }
+    e.relmse /= 181;
+    e.logerr /= 181;
+    e.energy = num / den;
+    return e;
+}
+
+template <class Fn>
+double min_time(Fn&& f, int reps) {
+    double best = 1e300;
+    for (int i = 0; i < reps; ++i) {
+        const auto t0 = std::chrono::steady_clock::now();
+        f();
+        best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    }
+    return best;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+    return gl_examples::run_main("guo21_fig6_error_runtime", [&]() -> int {
+        gl_examples::Cli cli(argc, argv, "guo21_fig6_error_runtime",
+                             "Guo21 Fig. 6: GOA vs Mie error of (|S1|+|S2|)/2 and runtime ratio vs r");
+        cli.common_options("out");
+        cli.finish();
+        const bool full = cli.full_quality();
+        const auto out = cli.out_dir();
+        const int threads = cli.threads();
+        (void)threads;
+
+        // ---- left: errors -------------------------------------------------------------------
+        const std::vector<double> etas = {1.33, 1.5, 1.2, 0.75};
+        std::vector<double> radii;
+        if (full) {
+            for (int i = 0; i <= 48; ++i) radii.push_back(std::pow(10.0, -0.3 + 2.6 * i / 48.0));  // 0.5 .. 200 um
+        } else {
+            radii = {0.5, 1, 1.5, 2, 3, 5, 7, 10, 20, 50, 100};
+        }
+        std::vector<Err> err(etas.size() * radii.size());
+        gl_examples::ProgressBar bar("errors", err.size());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+        for (int k = 0; k < int(err.size()); ++k) {
+            err[std::size_t(k)] = errors(etas[std::size_t(k) / radii.size()], radii[std::size_t(k) % radii.size()]);
+            bar.advance();
+        }
+        bar.done();
+        gl_examples::Csv ecsv({"eta", "r_um", "relmse", "energy", "logerr"});
+        for (std::size_t i = 0; i < etas.size(); ++i)
+            for (std::size_t j = 0; j < radii.size(); ++j) {
+                const auto& e = err[i * radii.size() + j];
+                ecsv.row({etas[i], radii[j], e.relmse, e.energy, e.logerr});
+            }
+        ecsv.write(out / "guo21_fig6_error.csv");
+
+        // ---- right: runtime ratio (serial, interleaved, minimum of repeats) -------------------
+        const std::vector<double> rt = full ? std::vector<double>{1, 2, 5, 10, 20, 50, 100, 200, 500, 1000}
+                                            : std::vector<double>{1, 2, 5, 10, 20, 50, 100, 200, 500, 1000};
+        std::vector<double> theta(181), mu(181);
+        for (int d = 0; d <= 180; ++d) {
+            theta[std::size_t(d)] = d * kPi / 180;
+            mu[std::size_t(d)] = d == 0 ? 1.0 : d == 180 ? -1.0 : std::cos(theta[std::size_t(d)]);
+        }
+        const std::complex<double> water(1.33, 0);
+        const grainlight::GoaTable table(water, 3, theta);  // built once: r-independent
+        volatile double sink = 0;
+        gl_examples::Csv tcsv({"r_um", "t_mie_s", "t_goa_s", "ratio", "t_goa_cached_s", "ratio_cached"});
+        struct Row {
+            double r, tm, tg, tc;
+        };
+        std::vector<Row> rows;
+        gl_examples::ProgressBar tbar("runtime", rt.size());
+        for (double r : rt) {
+            const double x = 2 * kPi * r / kLambda;
+            const int reps = full ? 15 : (r >= 500 ? 3 : 7);
+            double tm = 1e300, tg = 1e300, tc = 1e300;
+            for (int rep = 0; rep < reps; ++rep) {  // interleave so load changes hit both alike
+                tm = std::min(tm, min_time([&] {
+                                  const grainlight::LorenzMie mie(water, x);
+                                  double acc = 0;
+                                  for (double u : mu) {
+                                      const auto s = mie.amplitudes(u);
+                                      acc += 0.5 * (std::abs(s.S1) + std::abs(s.S2));
+                                  }
+                                  sink = acc;
+                              }, 1));
+                tg = std::min(tg, min_time([&] {
+                                  const grainlight::Goa goa(water, x);
+                                  double acc = 0;
+                                  for (double t : theta) {
+                                      const auto s = goa.amplitudes_at_angle(t);
+                                      acc += 0.5 * (std::abs(s.S1) + std::abs(s.S2));
+                                  }
+                                  sink = acc;
+                              }, 3));
+                tc = std::min(tc, min_time([&] {
+                                  double acc = 0;
+                                  for (std::size_t i = 0; i < theta.size(); ++i) {
+                                      const auto s = table.amplitudes(x, i);
+                                      acc += 0.5 * (std::abs(s.S1) + std::abs(s.S2));
+                                  }
+                                  sink = acc;
+                              }, 3));
+            }
+            rows.push_back({r, tm, tg, tc});
+            tcsv.row({r, tm, tg, tm / tg, tc, tm / tc});
+            tbar.advance();
+        }
+        tbar.done();
+        (void)sink;
+        tcsv.write(out / "guo21_fig6_runtime.csv");
+
+        const auto png = out / "guo21_fig6_error_runtime.png";
+        gl_examples::plot_with_matplotlib(
+            out / "guo21_fig6_error_runtime.py",
+            "e = read_csv(r'''" + (out / "guo21_fig6_error.csv").string() + "''')\n"
+            "t = read_csv(r'''" + (out / "guo21_fig6_runtime.csv").string() + "''')\n"
+            "fig, ax = plt.subplots(1, 3, figsize=(15, 4.2))\n"
+            "eta = np.array(e['eta']); r = np.array(e['r_um'])\n"
+            "for k, name in enumerate(['relmse', 'energy']):\n"
+            "    for v in sorted(set(eta)):\n"
+            "        s = eta == v\n"
+            "        ax[k].loglog(r[s], np.array(e[name])[s], 'o-', ms=3, label='eta = %g' % v)\n"
+            "    ax[k].axhline(0.01, color='k', lw=0.8, ls='--', label='0.01 (paper)')\n"
+            "    ax[k].axvline(2, color='gray', lw=0.8, ls=':')\n"
+            "    ax[k].set_xlabel('r [um]'); ax[k].legend(fontsize=8)\n"
+            "ax[0].set_title('per-angle RelMSE of (|S1|+|S2|)/2'); ax[1].set_title('energy-weighted error')\n"
+            "ax[2].loglog(t['r_um'], t['ratio'], 'o-', label='GOA solving rays per call')\n"
+            "ax[2].loglog(t['r_um'], t['ratio_cached'], 's-', label='GOA, rays cached per angle grid')\n"
+            "ax[2].set_xlabel('r [um]'); ax[2].set_ylabel('t_Mie / t_GOA'); ax[2].legend(fontsize=8)\n"
+            "ax[2].set_title('runtime ratio (181 angles)')\n"
+            "fig.suptitle('Guo21 Fig. 6, lambda = 0.6 um'); fig.tight_layout(); fig.savefig(png, dpi=110)\n",
+            png);
+
+        auto at = [&](double eta, double r) -> const Err& {
+            std::size_t i = std::size_t(std::find(etas.begin(), etas.end(), eta) - etas.begin());
+            std::size_t j = 0;
+            for (std::size_t k = 0; k < radii.size(); ++k)
+                if (std::abs(radii[k] - r) < std::abs(radii[j] - r)) j = k;
+            return err[i * radii.size() + j];
+        };
+        std::printf("Guo21 Fig. 6 (left): error of (|S1|+|S2|)/2, GOA (p <= 3) vs Mie, lambda = 0.6 um, 1-deg steps\n");
+        std::printf("  %-6s %8s %10s %10s %10s\n", "eta", "r [um]", "relmse", "energy", "logerr");
+        for (double eta : etas)
+            for (double r : {1.0, 2.0, 5.0, 10.0, 100.0}) {
+                const auto& e = at(eta, r);
+                std::printf("  %-6.2f %8.1f %10.4f %10.4f %10.4f\n", eta, r, e.relmse, e.energy, e.logerr);
+            }
+        std::printf("  paper: 'errors of less than 0.01 when r >= 2 um' -> the energy-weighted measure gives %.4f at "
+                    "2 um and %.4f at 5 um (eta 1.33);\n  the per-angle RelMSE gives %.3f at 2 um and %.3f at 100 um: "
+                    "only the energy-weighted measure matches (from r ~ 4-5 um on).\n",
+                    at(1.33, 2).energy, at(1.33, 5).energy, at(1.33, 2).relmse, at(1.33, 100).relmse);
+        std::printf("Guo21 Fig. 6 (right): runtime ratio t_Mie / t_GOA (181 angles, this build, side by side)\n");
+        std::printf("  %8s %12s %12s %8s %14s %8s\n", "r [um]", "t_Mie [s]", "t_GOA [s]", "ratio", "t_GOAcache [s]",
+                    "ratio");
+        for (const auto& row : rows)
+            std::printf("  %8.0f %12.3g %12.3g %8.1f %14.3g %8.1f\n", row.r, row.tm, row.tg, row.tm / row.tg, row.tc,
+                        row.tm / row.tc);
+        std::printf("  paper: the ratio grows linearly with r and reaches two orders of magnitude; GOA's cost is flat.\n");
+        auto row_at = [&](double r) {
+            for (const auto& row : rows)
+                if (row.r == r) return row;
+            return rows.back();
+        };
+        gl_examples::Json j;
+        j.num("energy_err_eta133_r2", at(1.33, 2).energy)
+            .num("energy_err_eta133_r5", at(1.33, 5).energy)
+            .num("energy_err_eta133_r10", at(1.33, 10).energy)
+            .num("relmse_eta133_r2", at(1.33, 2).relmse)
+            .num("relmse_eta133_r100", at(1.33, 100).relmse)
+            .num("ratio_r1", row_at(1).tm / row_at(1).tg)
+            .num("ratio_r100", row_at(100).tm / row_at(100).tg)
+            .num("ratio_r1000", row_at(1000).tm / row_at(1000).tg)
+            .num("ratio_cached_r100", row_at(100).tm / row_at(100).tc)
+            .num("t_goa_r1", row_at(1).tg)
+            .num("t_goa_r1000", row_at(1000).tg);
+        std::cout << j.str() << std::endl;
+        return 0;
+    });
+}
