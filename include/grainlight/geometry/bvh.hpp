@@ -171,51 +171,90 @@ private:
         std::uint32_t id;
     };
 
+    // Slab test with per-ray sign selection (no swaps); returns the entry distance in t_enter.
+    static bool box_hit(const Aabb<F>& b, const Vec3<F>& o, const Vec3<F>& inv_d, const int* neg, F t0, F t1,
+                        F& t_enter) noexcept {
+        constexpr F eps = std::numeric_limits<F>::epsilon();
+        constexpr F robust = F(1) + F(6) * eps / (F(1) - F(3) * eps);
+        for (int a = 0; a < 3; ++a) {
+            const F tn = ((neg[a] ? b.hi[a] : b.lo[a]) - o[a]) * inv_d[a];
+            const F tf = ((neg[a] ? b.lo[a] : b.hi[a]) - o[a]) * inv_d[a] * robust;
+            t0 = tn > t0 ? tn : t0;  // NaN-safe: a NaN bound leaves t0/t1 unchanged
+            t1 = tf < t1 ? tf : t1;
+        }
+        t_enter = t0;
+        return t0 <= t1;
+    }
+
     template <bool AnyHit>
     bool traverse(const Vec3<F>& o, const Vec3<F>& d, F t_min, F t_max, TriangleHit<F>& hit) const noexcept {
         if (nodes_.empty()) return false;
         const WatertightRay<F> wr(o, d);
         const Vec3<F> inv_d(F(1) / d.x, F(1) / d.y, F(1) / d.z);
-        const bool neg[3] = {inv_d.x < F(0), inv_d.y < F(0), inv_d.z < F(0)};
-        std::uint32_t stack[max_depth + 2];
+        const int neg[3] = {inv_d.x < F(0), inv_d.y < F(0), inv_d.z < F(0)};
+        struct Entry {
+            std::uint32_t node;
+            F t;
+        };
+        Entry stack[max_depth + 2];
         int sp = 0;
-        std::uint32_t node = 0;
         F closest = t_max;
         bool found = false;
+        F t_root;
+        if (!box_hit(nodes_[0].box, o, inv_d, neg, t_min, closest, t_root)) return false;
+        std::uint32_t node = 0;
         for (;;) {
             const BvhNode<F>& nd = nodes_[node];
-            if (intersect_aabb(nd.box, o, inv_d, t_min, closest)) {
-                if (nd.count > 0) {
-                    for (std::uint32_t i = nd.offset; i < nd.offset + nd.count; ++i) {
-                        F t, b1, b2;
-                        if (intersect_triangle_watertight(wr, tris_[i][0], tris_[i][1], tris_[i][2], t_min, closest, t,
-                                                          b1, b2)) {
-                            found = true;
-                            closest = t;
-                            hit.t = t;
-                            hit.prim = prim_ids_[i];
-                            hit.b1 = b1;
-                            hit.b2 = b2;
-                            hit.n_geom = normals_[i];
-                            if constexpr (AnyHit) return true;
-                        }
-                    }
-                    if (sp == 0) break;
-                    node = stack[--sp];
-                } else {
-                    // Visit the near child first.
-                    if (neg[nd.axis]) {
-                        stack[sp++] = node + 1;
-                        node = nd.offset;
-                    } else {
-                        stack[sp++] = nd.offset;
-                        node = node + 1;
+            if (nd.count > 0) {
+                for (std::uint32_t i = nd.offset; i < nd.offset + nd.count; ++i) {
+                    F t, b1, b2;
+                    if (intersect_triangle_watertight(wr, tris_[i][0], tris_[i][1], tris_[i][2], t_min, closest, t, b1,
+                                                      b2)) {
+                        found = true;
+                        closest = t;
+                        hit.t = t;
+                        hit.prim = prim_ids_[i];
+                        hit.b1 = b1;
+                        hit.b2 = b2;
+                        hit.n_geom = normals_[i];
+                        if constexpr (AnyHit) return true;
                     }
                 }
             } else {
-                if (sp == 0) break;
-                node = stack[--sp];
+                // Visit the nearer child first; remember the other with its entry distance.
+                std::uint32_t a = node + 1, b = nd.offset;
+                F ta, tb;
+                const bool ha = box_hit(nodes_[a].box, o, inv_d, neg, t_min, closest, ta);
+                const bool hb = box_hit(nodes_[b].box, o, inv_d, neg, t_min, closest, tb);
+                if (ha && hb) {
+                    if (tb < ta) {
+                        std::swap(a, b);
+                        std::swap(ta, tb);
+                    }
+                    stack[sp++] = {b, tb};
+                    node = a;
+                    continue;
+                }
+                if (ha) {
+                    node = a;
+                    continue;
+                }
+                if (hb) {
+                    node = b;
+                    continue;
+                }
             }
+            // Pop the next node whose box starts before the closest hit so far.
+            bool next = false;
+            while (sp > 0) {
+                const Entry e = stack[--sp];
+                if (e.t <= closest) {
+                    node = e.node;
+                    next = true;
+                    break;
+                }
+            }
+            if (!next) break;
         }
         return found;
     }
