@@ -120,3 +120,24 @@ TEST_CASE("TT medium: spectral weights average to alpha_s per channel; transmitt
     const auto e = tt.sample_interaction(ray, 1e-6f, rng);
     CHECK(e.is_escape());
 }
+
+TEST_CASE("TT medium: sampled exit directions reproduce the scatterometer's mean cosine", "[teleportation]") {
+    // The teleport's direction is drawn from the recorded joint table; its mean cosine must match
+    // the exact sample mean g of the scatterometer up to the table's binning (24 theta-uniform
+    // bins, values uniform in cos theta within a bin).
+    for (double rho : {1.0, 0.5}) {
+        const auto s = stats_of(rho, GrainMaterial::make_dielectric(1.5), 60000, 8);
+        const TeleportationMedium<float> tt(s, 0.5, 1.0);
+        Rng rng = Rng::from_key(17);
+        const Ray<float> ray(Vec3f(0.0f), Vec3f(0, 1, 0));
+        double sum = 0;
+        int n = 0;
+        for (int i = 0; i < 200000; ++i) {
+            const auto it = tt.sample_interaction(ray, 1e30f, rng);
+            if (!it.is_scatter()) continue;
+            sum += double(it.w.y);
+            ++n;
+        }
+        CHECK(sum / n == Approx(s.g(0)).margin(0.01));
+    }
+}
