@@ -27,7 +27,7 @@ std::vector<GrainExemplar> three_exemplars() {
 }
 
 struct Explicit {
-    GrainInstance g;
+    AggregateGrain g;
     Vec3d c;
 };
 
@@ -55,7 +55,7 @@ TEST_CASE("Algorithm 1 finds the same first grain hit as brute force over explic
         PeriodicTile tile = small_tile();
         GranularAggregate<U> agg(tile, VoxelizedBoundary<U>(shape, tile.side(), anchor), three_exemplars(), {0.5, 0.3, 0.2}, 5);
         std::vector<Explicit> grains;
-        agg.for_each_grain(Vec3d(-6.0), Vec3d(10.0, 6.0, 6.0), [&](const GrainInstance& g, const Vec3d& c) { grains.push_back({g, c}); });
+        agg.for_each_grain(Vec3d(-6.0), Vec3d(10.0, 6.0, 6.0), [&](const AggregateGrain& g, const Vec3d& c) { grains.push_back({g, c}); });
         REQUIRE(grains.size() == agg.grain_count());
         REQUIRE(grains.size() > 300);
         Rng rng = Rng::from_key(21, 22, std::uint64_t(anchor.x));
@@ -112,7 +112,7 @@ TEST_CASE("deterministic instancing: the same grain for a sphere from any ray", 
         REQUIRE(b.grain.exemplar == a.grain.exemplar);
         REQUIRE(b.grain.rotation.r0 == a.grain.rotation.r0);
         REQUIRE(glm::length(o2 - b.t * w - p) < 1e-4);
-        const GrainInstance again = agg.instance(a.grain.tile, a.grain.sphere);
+        const AggregateGrain again = agg.instance(a.grain.tile, a.grain.sphere);
         REQUIRE(again.rotation.r2 == a.grain.rotation.r2);
         ++exemplar_counts[a.grain.exemplar];
         ++checked;

@@ -8,13 +8,11 @@
 /// function of the three-dimensional tile index and the sphere id"), so memory is independent of
 /// the grain count and every ray sees the same grain.
 ///
-/// `intersect` is Meng15 Algorithm 1: a DDA over tile-sized voxels skips voxels that no grain
-/// can reach (the voxel and its 26 neighbours fully outside: a bounding sphere of radius < L/2
-/// only reaches into neighbouring voxels); in the others the bounding spheres along the ray are
-/// visited in order (PeriodicTile::first_hit on the infinite tiling), a sphere counts if its
-/// voxel is fully inside or (partial voxel) its centre passes the boundary's point-inside test,
-/// and the ray is then transformed into the grain's rotated unit frame and intersected with the
-/// exemplar's geometry; a miss continues at the sphere's exit.
+/// `intersect` is Meng15 Algorithm 1 as implemented by traversal/tiled_packing.hpp (TiledPacking:
+/// a DDA over tile-sized voxels skipping voxels no grain can reach, the bounding spheres along
+/// the ray in order, the inside test of partial voxels, the hashed rotation and exemplar); this
+/// header supplies the voxelized boundary as its classifier and the exemplar geometry (analytic
+/// sphere or mesh BVH) as its grain intersector, and keeps the surface normal of the hit.
 ///
 /// Precision: positions are (64-bit tile index, double offset from that tile's corner); the
 /// boundary and the scene live in the frame of the boundary's anchor tile, so an aggregate
@@ -43,6 +41,7 @@
 #include "grainlight/geometry/transform.hpp"
 #include "grainlight/geometry/voxelized_boundary.hpp"
 #include "grainlight/packing/periodic_tile.hpp"
+#include "grainlight/traversal/tiled_packing.hpp"
 
 namespace grainlight {
 
@@ -127,7 +126,7 @@ private:
 
 /// A grain of the aggregate: the bounding sphere (id in the tile, absolute tile index) and its
 /// instancing (exemplar index and rotation: x_world = center + R * rotation.to_world(x_unit)).
-struct GrainInstance {
+struct AggregateGrain {
     std::uint32_t sphere = 0;
     Vec3i64 tile{0, 0, 0};
     std::uint32_t exemplar = 0;
@@ -140,7 +139,7 @@ struct AggregateHit {
     bool hit = false;
     double t = std::numeric_limits<double>::infinity();
     Vec3d n{0.0, 0.0, 1.0};
-    GrainInstance grain{};
+    AggregateGrain grain{};
     explicit operator bool() const noexcept { return hit; }
 };
 
@@ -163,56 +162,37 @@ public:
     /// weights, or a boundary voxelized with a different tile side.
     GranularAggregate(PeriodicTile tile, VoxelizedBoundary<Shape> boundary, std::vector<GrainExemplar> exemplars,
                       std::vector<double> weights, std::uint64_t seed = 1)
-        : tile_(std::move(tile)), boundary_(std::move(boundary)), exemplars_(std::move(exemplars)), seed_(seed) {
-        const char* where = "GranularAggregate";
-        check_argument(!exemplars_.empty(), where, "exemplars.size()", exemplars_.size(), ">= 1");
-        check_argument(!weights.empty(), where, "mixing weights.size()", weights.size(), ">= 1 (one per exemplar)");
-        check_argument(weights.size() == exemplars_.size(), where, "mixing weights.size()", weights.size(),
-                       "equal to exemplars.size() = " + std::to_string(exemplars_.size()));
-        check_argument(std::abs(boundary_.tile_side() - tile_.side()) <= 1e-12 * tile_.side(), where,
-                       "boundary tile side", boundary_.tile_side(), "equal to the tile side " + std::to_string(tile_.side()));
-        check_argument(tile_.size() > 0, where, "spheres in the tile", tile_.size(), ">= 1");
-        mix_ = DiscreteDistribution<double>(std::span<const double>(weights));  // validates the weights
-        // Only search spheres up to one tile diagonal per call (every query is bounded anyway).
-        tile_.set_max_search_distance(4.0 * tile_.side());
-    }
+        : packing_(make_packing(std::move(tile), std::move(boundary), exemplars, std::move(weights), seed)),
+          exemplars_(std::move(exemplars)),
+          seed_(seed) {}
 
-    [[nodiscard]] const PeriodicTile& tile() const noexcept { return tile_; }
-    [[nodiscard]] const VoxelizedBoundary<Shape>& boundary() const noexcept { return boundary_; }
+    [[nodiscard]] const PeriodicTile& tile() const noexcept { return packing_.tile(); }
+    [[nodiscard]] const VoxelizedBoundary<Shape>& boundary() const noexcept { return packing_.boundary(); }
     [[nodiscard]] const std::vector<GrainExemplar>& exemplars() const noexcept { return exemplars_; }
-    [[nodiscard]] const DiscreteDistribution<double>& mixing() const noexcept { return mix_; }
+    /// The Algorithm 1 traversal this aggregate runs on.
+    [[nodiscard]] const TiledPacking<VoxelizedBoundary<Shape>>& packing() const noexcept { return packing_; }
     [[nodiscard]] std::uint64_t seed() const noexcept { return seed_; }
     /// Bounding-sphere radius R of the grains (world units).
-    [[nodiscard]] double grain_radius() const noexcept { return tile_.radius(); }
+    [[nodiscard]] double grain_radius() const noexcept { return tile().radius(); }
 
     /// Bytes used: tile (centres + query grid, estimated) + 2-bit voxels + exemplar geometry.
     /// Independent of the number of grains.
     [[nodiscard]] std::size_t memory_bytes() const noexcept {
-        const auto m = std::size_t(tile_.grid_resolution());
-        std::size_t b = tile_.size() * sizeof(Vec3d) * 2 + m * m * m * sizeof(std::uint32_t) + tile_.size() * 27 * 32;
-        b += boundary_.memory_bytes();
+        const auto m = std::size_t(tile().grid_resolution());
+        std::size_t b = tile().size() * sizeof(Vec3d) * 2 + m * m * m * sizeof(std::uint32_t) + tile().size() * 27 * 32;
+        b += boundary().memory_bytes();
         for (const auto& e : exemplars_) b += e.memory_bytes();
         return b;
     }
 
-    /// The deterministic instancing of sphere `sphere` of absolute tile `tile` (Meng15 Sec. 3.1).
-    [[nodiscard]] GrainInstance instance(const Vec3i64& tile, std::uint32_t sphere) const noexcept {
-        const std::uint64_t h = hash_words(seed_, std::uint64_t(tile.x), std::uint64_t(tile.y), std::uint64_t(tile.z));
-        Rng rng = Rng::from_key(seed_ ^ 0x6772616e5f696e73ull, h, sphere);
-        GrainInstance g;
-        g.sphere = sphere;
-        g.tile = tile;
-        g.exemplar = std::uint32_t(mix_.sample(rng.uniform<double>()));
-        const double u0 = rng.uniform<double>(), u1 = rng.uniform<double>(), u2 = rng.uniform<double>();
-        g.rotation = uniform_random_rotation(Vec3d(u0, u1, u2));
-        return g;
+    /// The deterministic instancing of sphere `sphere` of absolute tile `tile` (Meng15 Sec. 3.1),
+    /// as TiledPacking::instance defines it.
+    [[nodiscard]] AggregateGrain instance(const Vec3i64& tile, std::uint32_t sphere) const noexcept {
+        return from_tiled(packing_.instance(sphere, tile));
     }
     /// Is the bounding sphere (tile, sphere) a grain of the aggregate (centre inside the boundary)?
     [[nodiscard]] bool contains_sphere(const Vec3i64& tile, std::uint32_t sphere) const noexcept {
-        const VoxelClass c = boundary_.classify(tile);
-        if (c == VoxelClass::outside) return false;
-        if (c == VoxelClass::inside) return true;
-        return boundary_.point_inside(tile, tile_.center(sphere));
+        return packing_.contains(sphere, tile);
     }
 
     /// Number of grains (bounding spheres with their centre inside the boundary): a loop over the
@@ -220,38 +200,38 @@ public:
     [[nodiscard]] std::uint64_t grain_count() const {
         if constexpr (std::is_same_v<Shape, EverywhereBoundary>) return std::numeric_limits<std::uint64_t>::max();
         std::uint64_t n = 0;
-        const Vec3i64 lo = boundary_.tile_lo(), hi = boundary_.tile_hi();
+        const Vec3i64 lo = boundary().tile_lo(), hi = boundary().tile_hi();
         for (std::int64_t z = lo.z; z <= hi.z; ++z)
             for (std::int64_t y = lo.y; y <= hi.y; ++y)
                 for (std::int64_t x = lo.x; x <= hi.x; ++x) {
                     const Vec3i64 t(x, y, z);
-                    const VoxelClass c = boundary_.classify(t);
-                    if (c == VoxelClass::inside) n += tile_.size();
+                    const VoxelClass c = boundary().classify(t);
+                    if (c == VoxelClass::inside) n += tile().size();
                     if (c == VoxelClass::partial)
-                        for (std::uint32_t s = 0; s < tile_.size(); ++s) n += boundary_.point_inside(t, tile_.center(s));
+                        for (std::uint32_t s = 0; s < tile().size(); ++s) n += boundary().point_inside(t, tile().center(s));
                 }
         return n;
     }
 
     /// Split a point of the anchor (scene) frame into (absolute tile, offset from its corner).
-    void to_tile_frame(const Vec3d& p, Vec3i64& tile, Vec3d& local) const noexcept {
-        const double L = tile_.side();
+    void to_tile_frame(const Vec3d& p, Vec3i64& tile_index, Vec3d& local) const noexcept {
+        const double L = this->tile().side();
         for (int a = 0; a < 3; ++a) {
             const std::int64_t k = detail::floor_i64(p[a] / L);
-            tile[a] = boundary_.anchor()[a] + k;
+            tile_index[a] = boundary().anchor()[a] + k;
             local[a] = p[a] - double(k) * L;
         }
     }
     /// World (anchor-frame) centre of a grain's bounding sphere.
-    [[nodiscard]] Vec3d sphere_center(const Vec3i64& tile, std::uint32_t sphere) const noexcept {
-        return boundary_.to_shape_frame(tile, tile_.center(sphere));
+    [[nodiscard]] Vec3d sphere_center(const Vec3i64& tile_index, std::uint32_t sphere) const noexcept {
+        return boundary().to_shape_frame(tile_index, this->tile().center(sphere));
     }
 
     /// Intersect the ray (origin tile + local origin, unit direction d) with one grain instance
     /// for t in (t_min, t_max). `c_rel` is the grain's centre relative to the ray's origin tile.
-    [[nodiscard]] bool intersect_instance(const GrainInstance& g, const Vec3d& o_rel_center, const Vec3d& d, double t_min,
+    [[nodiscard]] bool intersect_instance(const AggregateGrain& g, const Vec3d& o_rel_center, const Vec3d& d, double t_min,
                                           double t_max, double& t, Vec3d& n) const noexcept {
-        const double R = tile_.radius();
+        const double R = tile().radius();
         const Vec3d o_l = g.rotation.to_local(o_rel_center) / R;
         const Vec3d d_l = g.rotation.to_local(d);
         double tl = 0;
@@ -262,7 +242,7 @@ public:
         return true;
     }
     /// Ray vs a given grain (e.g. a path travelling inside that grain), anchor frame.
-    [[nodiscard]] AggregateHit intersect_grain(const GrainInstance& g, const Vec3d& o, const Vec3d& d, double t_min,
+    [[nodiscard]] AggregateHit intersect_grain(const AggregateGrain& g, const Vec3d& o, const Vec3d& d, double t_min,
                                                double t_max) const noexcept {
         AggregateHit h;
         double t;
@@ -290,72 +270,31 @@ public:
     [[nodiscard]] AggregateHit intersect(const Vec3i64& otile, const Vec3d& olocal, const Vec3d& d, double t_min,
                                          double t_max, AggregateCounters* counters = nullptr) const noexcept {
         AggregateHit best;
-        const double L = tile_.side();
-        // Clip to the voxel grid (already one voxel larger than the shape).
-        const Vec3i64 glo = boundary_.tile_lo(), ghi = boundary_.tile_hi();
-        const Vec3d blo = L * Vec3d(glo - otile), bhi = L * Vec3d(ghi - otile + Vec3i64(1));
-        double ta = t_min, tb = t_max;
-        for (int a = 0; a < 3; ++a) {
-            if (d[a] == 0.0) {
-                if (olocal[a] < blo[a] || olocal[a] > bhi[a]) return best;
-                continue;
-            }
-            double t0 = (blo[a] - olocal[a]) / d[a], t1 = (bhi[a] - olocal[a]) / d[a];
-            if (t0 > t1) std::swap(t0, t1);
-            ta = std::max(ta, t0);
-            tb = std::min(tb, t1);
+        Vec3d n_local(0.0);
+        auto grain = [&](const TiledGrain& g, const GrainRay& r, double t0, double t1, double& t_hit) {
+            // TiledPacking's local ray has |d| = 1 / R and the world parameter t.
+            // A grain touching its bounding sphere (a sphere of radius 1, mesh vertices at radius
+            // 1) is entered at t0 = the sphere entry; the grain's own root may round to just below
+            // it, so the entry bound is widened slightly (never below the query's t_min).
+            const double R = g.radius;
+            const double lo = t0 > t_min ? std::max(t_min, t0 - 1e-7 * R) : t0;
+            double tl = 0;
+            if (!exemplars_[g.exemplar].intersect(r.o, r.d * R, lo / R, t1 / R, tl, n_local)) return false;
+            t_hit = std::max(tl * R, t0);
+            return true;
+        };
+        TiledTraversalStats stats;
+        const TiledHit h = packing_.intersect(otile, olocal, d, t_min, t_max, grain, counters ? &stats : nullptr);
+        if (counters) {
+            counters->voxels += stats.voxels_visited;
+            counters->spheres += stats.spheres_tested;
+            counters->instances += stats.grains_tested;
         }
-        if (!(ta < tb)) return best;
-        // Voxel DDA (Amanatides & Woo 1987) from ta, in the ray's tile frame.
-        const Vec3d p0 = olocal + ta * d;
-        std::array<std::int64_t, 3> v{}, step{};
-        std::array<double, 3> t_next{}, t_delta{};
-        for (int a = 0; a < 3; ++a) {
-            v[a] = detail::floor_i64(p0[a] / L);
-            step[a] = d[a] > 0 ? 1 : (d[a] < 0 ? -1 : 0);
-            t_delta[a] = step[a] != 0 ? L / std::abs(d[a]) : std::numeric_limits<double>::infinity();
-            t_next[a] = step[a] == 0 ? std::numeric_limits<double>::infinity()
-                                     : (double(v[a] + (step[a] > 0 ? 1 : 0)) * L - olocal[a]) / d[a];
-        }
-        double t = t_min;  // sphere search position: every sphere exited before t has been handled
-        double tv0 = ta;
-        for (int guard = 0; guard < (1 << 26) && tv0 < tb; ++guard) {
-            const int axis = (t_next[0] < t_next[1]) ? (t_next[0] < t_next[2] ? 0 : 2) : (t_next[1] < t_next[2] ? 1 : 2);
-            const double tv1 = std::min(t_next[axis], tb);
-            if (counters) ++counters->voxels;
-            const Vec3i64 vt(otile.x + v[0], otile.y + v[1], otile.z + v[2]);
-            // Spheres overlapping skipped voxels (all neighbours outside) cannot be grains, so
-            // the search may start at the voxel entry.
-            t = std::max(t, tv0);
-            if (tv1 > t && !unreachable(vt)) {
-                // Bounding spheres along the ray entered before the voxel's exit, in order.
-                for (int inner = 0; inner < (1 << 20); ++inner) {
-                    const TileHit th = tile_.first_hit(otile, olocal, d, t, tv1);
-                    if (!th) break;
-                    if (counters) ++counters->spheres;
-                    if (contains_sphere(th.tile, th.sphere)) {
-                        const GrainInstance g = instance(th.tile, th.sphere);
-                        const Vec3d c = L * Vec3d(th.tile - otile) + tile_.center(th.sphere);
-                        double t_hit;
-                        Vec3d n;
-                        if (counters) ++counters->instances;
-                        const double lo = std::max(t_min, th.t_enter), hi = std::min(th.t_exit, t_max);
-                        if (lo < hi && intersect_instance(g, olocal - c, d, lo, hi, t_hit, n)) {
-                            best.hit = true;
-                            best.t = t_hit;
-                            best.n = n;
-                            best.grain = g;
-                            return best;
-                        }
-                    }
-                    t = th.t_exit;  // exactly: the same sphere is excluded next time (first_hit contract)
-                    if (!(t < tv1)) break;
-                }
-            }
-            tv0 = tv1;
-            v[axis] += step[axis];
-            t_next[axis] += t_delta[axis];
-        }
+        if (!h) return best;
+        best.hit = true;
+        best.t = h.t;
+        best.grain = from_tiled(h.grain);
+        best.n = best.grain.rotation.to_world(n_local);
         return best;
     }
 
@@ -365,31 +304,45 @@ public:
     }
 
     /// Brute force reference: every grain overlapping the box [lo, hi] (anchor frame) is listed
-    /// (for tests and the explicit-instance benchmark); fn(GrainInstance, centre).
+    /// (for tests and the explicit-instance benchmark); fn(AggregateGrain, centre).
     template <class Fn>
     void for_each_grain(const Vec3d& lo, const Vec3d& hi, Fn&& fn) const {
         // Query the tiling in a frame near the anchor (no precision loss: offsets are small).
-        tile_.for_each_overlapping(lo, hi, [&](const TileSphereRef& r) {
-            const Vec3i64 abs_tile = r.tile + boundary_.anchor();
+        tile().for_each_overlapping(lo, hi, [&](const TileSphereRef& r) {
+            const Vec3i64 abs_tile = r.tile + boundary().anchor();
             if (!contains_sphere(abs_tile, r.sphere)) return;
             fn(instance(abs_tile, r.sphere), r.center);
         });
     }
 
 private:
-    /// True if neither the voxel nor any of its 26 neighbours can hold a grain centre.
-    [[nodiscard]] bool unreachable(const Vec3i64& vt) const noexcept {
-        for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx)
-                    if (boundary_.classify(vt + Vec3i64(dx, dy, dz)) != VoxelClass::outside) return false;
-        return true;
+    static TiledPacking<VoxelizedBoundary<Shape>> make_packing(PeriodicTile tile, VoxelizedBoundary<Shape> boundary,
+                                                               const std::vector<GrainExemplar>& exemplars,
+                                                               std::vector<double> weights, std::uint64_t seed) {
+        const char* where = "GranularAggregate";
+        check_argument(!exemplars.empty(), where, "exemplars.size()", exemplars.size(), ">= 1");
+        check_argument(!weights.empty(), where, "mixing weights.size()", weights.size(), ">= 1 (one per exemplar)");
+        check_argument(weights.size() == exemplars.size(), where, "mixing weights.size()", weights.size(),
+                       "equal to exemplars.size() = " + std::to_string(exemplars.size()));
+        check_argument(std::abs(boundary.tile_side() - tile.side()) <= 1e-12 * tile.side(), where, "boundary tile side",
+                       boundary.tile_side(), "equal to the tile side " + std::to_string(tile.side()));
+        check_argument(tile.size() > 0, where, "spheres in the tile", tile.size(), ">= 1");
+        (void)DiscreteDistribution<double>(std::span<const double>(weights));  // validates the weights
+        return TiledPacking<VoxelizedBoundary<Shape>>(std::move(tile), std::move(boundary), std::move(weights), seed);
+    }
+    [[nodiscard]] static AggregateGrain from_tiled(const TiledGrain& t) noexcept {
+        AggregateGrain g;
+        g.sphere = t.sphere;
+        g.tile = t.tile;
+        g.exemplar = t.exemplar;
+        g.rotation.r0 = t.to_local[0];
+        g.rotation.r1 = t.to_local[1];
+        g.rotation.r2 = t.to_local[2];
+        return g;
     }
 
-    PeriodicTile tile_;
-    VoxelizedBoundary<Shape> boundary_;
+    TiledPacking<VoxelizedBoundary<Shape>> packing_;
     std::vector<GrainExemplar> exemplars_;
-    DiscreteDistribution<double> mix_;
     std::uint64_t seed_;
 };
 
