@@ -68,6 +68,11 @@ TEST_CASE("PeriodicTile validates its input", "[tile]") {
     CHECK_THROWS_AS(PeriodicTile(0.0, 0.1, two), invalid_argument);
     CHECK_THROWS_AS(PeriodicTile(1.0, 0.5, {Vec3d(0.5)}), invalid_argument);  // touches its own image
     CHECK_THROWS_AS(PeriodicTile(1.0, 0.1, {Vec3d(std::numeric_limits<double>::infinity(), 0, 0)}), invalid_argument);
+    // Tiny radii (e.g. from a hostile file) must not request a huge cell grid.
+    const PeriodicTile tiny(1.0, 1e-12, two);
+    CHECK(tiny.grid_resolution() <= 4);
+    CHECK(tiny.first_hit(Vec3i64(0, 0, 0), Vec3d(0.0, 0.5, 0.5), Vec3d(1, 0, 0), 0.0, 1.0).sphere == 0);
+    CHECK(PeriodicTile(1.0, 1e-300, two).size() == 2);
     // Centres are wrapped into [0, L).
     PeriodicTile t(1.0, 0.1, {Vec3d(-0.25, 1.5, 3.0)});
     CHECK(t.center(0).x == Approx(0.75));

@@ -149,7 +149,7 @@ public:
 
     LsSimulation(std::vector<Vec3d> x, double diam0, double box, double max_diam, double growth, Rng& rng)
         : n_(x.size()), box_(box), d0_(diam0), a_(growth), x_(std::move(x)) {
-        m_ = static_cast<int>(std::max(1.0, std::floor(box / max_diam)));
+        m_ = static_cast<int>(grid_cells_per_axis(box, max_diam, n_));
         w_ = box / m_;
         v_.resize(n_);
         tl_.assign(n_, 0.0);

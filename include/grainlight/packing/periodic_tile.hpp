@@ -68,6 +68,16 @@ namespace detail {
     return static_cast<std::int64_t>(std::floor(x));
 }
 
+/// Cells per axis of a cell grid over a periodic cube of side `side` whose cells are at least
+/// `min_width` wide, for `n` points: floor(side / min_width), but at most max(4, (16 n)^(1/3))
+/// and 256, so tiny radii (or hostile files) cannot request huge grids. Wider cells keep every
+/// neighbour search correct.
+[[nodiscard]] inline std::int64_t grid_cells_per_axis(double side, double min_width, std::size_t n) noexcept {
+    const double cap = std::min(256.0, std::max(4.0, std::floor(std::cbrt(16.0 * double(n)))));
+    const double m = side / min_width;
+    return static_cast<std::int64_t>(std::clamp(std::isfinite(m) ? std::floor(m) : cap, 1.0, cap));
+}
+
 /// Calls fn(i, j, r_ij) for every pair of centres (i < j, and also i == j never) whose
 /// minimum-image-compatible displacement r_ij = c_j + shift - c_i has |r_ij| < cutoff, in a
 /// periodic cube of side `side`. Requires cutoff <= side / 1 (cells of width >= cutoff). With
@@ -77,7 +87,7 @@ template <class Fn>
 void for_each_close_pair(const std::vector<Vec3d>& c, double side, double cutoff, Fn&& fn) {
     const std::size_t n = c.size();
     if (n < 2) return;
-    const auto m = static_cast<std::int64_t>(std::max(1.0, std::floor(side / cutoff)));
+    const std::int64_t m = grid_cells_per_axis(side, cutoff, n);
     const double w = side / double(m);
     std::vector<std::uint32_t> head(static_cast<std::size_t>(m * m * m), UINT32_MAX), next(n, UINT32_MAX);
     std::vector<std::array<std::int64_t, 3>> cell(n);
@@ -427,8 +437,8 @@ private:
     }
 
     void build_grid(double cell_size_in_radii) {
-        const double target = std::max(cell_size_in_radii * radius_, side_ / 256);  // <= 256^3 cells
-        m_ = static_cast<std::int64_t>(std::max(1.0, std::floor(side_ / target)));
+        const double target = cell_size_in_radii * radius_;
+        m_ = detail::grid_cells_per_axis(side_, target, centers_.size());
         h_ = side_ / double(m_);
         const auto ncell = static_cast<std::size_t>(m_ * m_ * m_);
         std::vector<std::uint32_t> counts(ncell + 1, 0);

@@ -39,7 +39,7 @@ inline bool rsa_centers(std::size_t n, double radius, double side, Rng& rng, std
     out.clear();
     out.reserve(n);
     const double diam = 2 * radius;
-    const auto m = static_cast<std::int64_t>(std::max(1.0, std::floor(side / diam)));
+    const std::int64_t m = grid_cells_per_axis(side, diam, n);
     const double w = side / double(m);
     std::vector<std::uint32_t> head(static_cast<std::size_t>(m * m * m), UINT32_MAX), next;
     next.reserve(n);
