@@ -19,7 +19,9 @@
 #include <limits>
 
 #include "grainlight/core/error.hpp"
+#include "grainlight/core/frame.hpp"
 #include "grainlight/core/math.hpp"
+#include "grainlight/core/ray.hpp"
 #include "grainlight/core/vector.hpp"
 #include "grainlight/core/warp.hpp"
 #include "grainlight/scene/concepts.hpp"
@@ -28,6 +30,17 @@
 namespace grainlight {
 
 enum class LightType : std::uint8_t { point, spot, quad, directional, environment };
+
+/// A photon leaving a light (walks that start from a light: photon tracing, light tracing).
+/// `weight` is the power the photon carries (W per channel): Le cos / (pdf_pos pdf_dir), so the
+/// mean weight over photons is the light's total emitted power.
+template <std::floating_point F, class S>
+struct EmissionSample {
+    Ray<F> ray;
+    S weight{F(0)};
+    bool valid = false;
+    [[nodiscard]] explicit operator bool() const noexcept { return valid; }
+};
 
 /// One light. Build with the factory functions (they validate).
 template <std::floating_point F, class S>
@@ -145,6 +158,40 @@ struct Light {
             }
         }
         return ls;
+    }
+
+    /// Sample a photon leaving the light (u_pos, u_dir in [0,1)^2): point lights emit uniformly
+    /// (weight 4 pi I), spots uniformly inside their outer cone (weight I falloff / pdf), quads
+    /// from a uniform point with a cosine-distributed direction into their front side (weight
+    /// pi A L). Directional and environment lights need the scene's bounds and are not sampled
+    /// here (invalid sample).
+    [[nodiscard]] EmissionSample<F, S> sample_emission(Vec2<F> u_pos, Vec2<F> u_dir) const noexcept {
+        EmissionSample<F, S> e;
+        switch (type) {
+            case LightType::point: {
+                e.ray = Ray<F>(position, sample_uniform_sphere(u_dir));
+                e.weight = power * (F(4) * pi_v<F>);
+                e.valid = true;
+                return e;
+            }
+            case LightType::spot: {
+                const Vec3<F> local = sample_uniform_cone(u_dir, cos_outer);
+                e.ray = Ray<F>(position, glm::normalize(Frame<F>(direction).to_world(local)));
+                e.weight = power * (spot_falloff(local.z) / uniform_cone_pdf(cos_outer));
+                e.valid = true;
+                return e;
+            }
+            case LightType::quad: {
+                const Vec3<F> local = sample_cosine_hemisphere(u_dir);
+                const Vec3<F> d = glm::normalize(Frame<F>(quad.normal).to_world(local));
+                e.ray = Ray<F>(offset_ray_origin(quad.sample(u_pos), quad.normal, d), d);
+                e.weight = power * (pi_v<F> * quad.area());
+                e.valid = local.z > F(0);
+                return e;
+            }
+            default:
+                return e;
+        }
     }
 
     /// Solid-angle pdf (without selection probability) of `sample` producing direction w from

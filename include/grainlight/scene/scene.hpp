@@ -171,6 +171,17 @@ public:
         ls.pdf /= F(n);
         return ls;
     }
+    /// A photon from a light picked uniformly by u_pick (weight includes the selection: the mean
+    /// weight is the total power of the scene's point, spot and quad lights). Photon walks start
+    /// here (integrators/walk.hpp, TransportMode::importance).
+    [[nodiscard]] EmissionSample<F, S> sample_emission(F u_pick, Vec2<F> u_pos, Vec2<F> u_dir) const noexcept {
+        if (lights_.empty()) return {};
+        const std::size_t n = lights_.size();
+        const std::size_t i = std::min(n - 1, std::size_t(u_pick * F(n)));
+        EmissionSample<F, S> e = lights_[i].sample_emission(u_pos, u_dir);
+        e.weight *= F(n);
+        return e;
+    }
     /// Solid-angle pdf (with selection probability) that sample_light from `ref` yields direction
     /// `w` reaching `hit` (an emitter, or the environment if `hit` is a miss).
     [[nodiscard]] F light_pdf(const Vec3<F>& ref, const Vec3<F>& w, const SurfaceHit<F, S>& hit) const noexcept {
