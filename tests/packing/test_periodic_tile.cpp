@@ -118,6 +118,20 @@ TEST_CASE("first_hit agrees with brute force over explicit tile copies", "[tile]
     }
 }
 
+TEST_CASE("first_hit with a float Ray matches the double query", "[tile]") {
+    const PeriodicTile tile = small_tile(0.3, 100, 12, 1.0);
+    Rng rng = Rng::from_key(13);
+    for (int k = 0; k < 100; ++k) {
+        const Vec3f o(rng.uniform<float>() * 3, rng.uniform<float>() * 3, rng.uniform<float>() * 3);
+        const Vec3f d = sample_uniform_sphere<float>(rng.uniform2<float>());
+        const TileHit a = tile.first_hit(Rayf(o, d), 0.0f, 2.0f);
+        const TileHit b = tile.first_hit(Vec3i64(0, 0, 0), Vec3d(o), Vec3d(d), 0.0, 2.0);
+        REQUIRE(a.hit == b.hit);
+        CHECK(a.sphere == b.sphere);
+        CHECK(a.t_enter == b.t_enter);
+    }
+}
+
 TEST_CASE("first_hit continues from t_exit without repeating a sphere", "[tile]") {
     const PeriodicTile tile = small_tile(0.3, 200, 5, 1.0);
     Rng rng = Rng::from_key(9);

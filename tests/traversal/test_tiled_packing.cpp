@@ -154,6 +154,16 @@ TEST_CASE("Algorithm 1 in an unbounded aggregate agrees with brute force", "[til
         CHECK(a.grain.exemplar == b.grain.exemplar);
         CHECK(a.t >= a.grain.t_enter);
         CHECK(a.t <= a.grain.t_exit);
+        // The hit point in the grain frame lies on the exemplar's surface.
+        const Vec3d pl = a.grain.point_to_local(o + a.t * d);
+        CHECK(glm::length(pl - grain_center[a.grain.exemplar]) == Approx(grain_radius[a.grain.exemplar]).epsilon(1e-9));
+        CHECK(glm::length(a.grain.point_to_world(pl) - (o + a.t * d)) < 1e-12);
+        // The Ray<F> overload agrees.
+        if (t_min == 0.0) {
+            LocalGrains lg2;
+            const TiledHit c = pk.intersect(Rayd(o, d), 0.0, t_max, lg2);
+            CHECK(c.t == a.t);
+        }
     }
     CHECK(hits > 50);
 }
