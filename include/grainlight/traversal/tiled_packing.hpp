@@ -180,8 +180,9 @@ public:
 
     /// Meng15 Algorithm 1: first grain hit along o + t d, t in [t_min, t_max]; the origin is
     /// (origin_tile, local_origin) as in PeriodicTile::first_hit and grain centres are reported
-    /// in that frame. `grain` is the GrainIntersector. With t_max = inf the ray is clipped to the
-    /// classifier's tile range if it has one, else to tile().max_search_distance().
+    /// in that frame. `grain` is the GrainIntersector. The ray is clipped to the classifier's
+    /// tile range if it has one, and to tile().max_search_distance() (a ray along a channel of
+    /// a periodic packing may never hit).
     template <class Intersector>
         requires GrainIntersector<std::remove_reference_t<Intersector>>
     [[nodiscard]] TiledHit intersect(const Vec3i64& origin_tile, const Vec3d& local_origin, const Vec3d& d,
@@ -198,9 +199,9 @@ public:
             const Vec3d bhi = Vec3d(double(hi.x + 2 - origin_tile.x), double(hi.y + 2 - origin_tile.y),
                                     double(hi.z + 2 - origin_tile.z)) * L;
             if (!clip_to_box(local_origin, d, blo, bhi, t_min, t_max)) return result;
-        } else {
-            t_max = std::min(t_max, t_min + tile_.max_search_distance() / dlen);
         }
+        // A ray along a channel of the periodic packing may never hit a sphere: bound the search.
+        t_max = std::min(t_max, t_min + tile_.max_search_distance() / dlen);
         double cursor = t_min;  // everything before this parameter has been processed
         for (GridDda<double> dda(origin_tile, local_origin, d, Vec3d(L), t_min, t_max); !dda.done(); dda.step()) {
             if (stats) ++stats->voxels_visited;
