@@ -118,6 +118,22 @@ TEST_CASE("first_hit agrees with brute force over explicit tile copies", "[tile]
     }
 }
 
+TEST_CASE("first_hit terminates on a ray along an empty channel", "[tile]") {
+    PeriodicTile tile(1.0, 0.1, {Vec3d(0.5)});
+    const TileHit h = tile.first_hit(Vec3i64(0, 0, 0), Vec3d(0.0, 0.05, 0.05), Vec3d(1, 0, 0), 0.0,
+                                     std::numeric_limits<double>::infinity());
+    CHECK_FALSE(h);
+    tile.set_max_search_distance(10.0);
+    CHECK(tile.max_search_distance() == 10.0);
+    // Slightly tilted: hits eventually (within the search distance) at the right sphere.
+    const Vec3d d = glm::normalize(Vec3d(1.0, 0.05, 0.0));
+    const TileHit g = tile.first_hit(Vec3i64(0, 0, 0), Vec3d(0.0, 0.05, 0.5), d, 0.0, 1e9);
+    REQUIRE(g);
+    const Vec3d c = tile.center(0) + Vec3d(g.tile);
+    const Vec3d p = Vec3d(0.0, 0.05, 0.5) + g.t_enter * d;
+    CHECK(glm::length(p - c) == Approx(0.1));
+}
+
 TEST_CASE("first_hit with a float Ray matches the double query", "[tile]") {
     const PeriodicTile tile = small_tile(0.3, 100, 12, 1.0);
     Rng rng = Rng::from_key(13);
