@@ -192,6 +192,8 @@ struct GrainInteraction {
     Vec3d x_o{0.0}, w_o{0.0};  ///< exit point from the bounding sphere and exit direction (if not absorbed)
     double flight = 0;         ///< distance from the previous exit point (or walk start) to x_i
     bool absorbed = false;
+    RGBd survival{1.0, 1.0, 1.0};  ///< per-channel throughput ratio over the interaction (the
+                                   ///< grain's survival weight; 1 for lossless grains)
     int index = 0;             ///< 1 for the first interaction of the walk
 };
 
@@ -235,6 +237,13 @@ PhotonWalkEnd ept_photon_walk(const GranularAggregate<Shape>& agg, Vec3d p, Vec3
         Vec3d q = p + h.t * d;
         if (!seg(p, q)) return PhotonWalkEnd::stopped;
         Vec3d n = h.n;
+        const S before = throughput;
+        auto set_survival = [&]() {
+            for (std::size_t ch = 0; ch < 3; ++ch) {
+                const std::size_t k = std::min<std::size_t>(ch, S::size - 1);
+                gi.survival[ch] = before[k] > F(0) ? double(throughput[k]) / double(before[k]) : 0.0;
+            }
+        };
         for (;;) {
             const GrainSojourn s = grain_sojourn(
                 agg, h.grain, q, d, n, throughput, rng, TransportMode::importance, max_events - events,
@@ -246,6 +255,7 @@ PhotonWalkEnd ept_photon_walk(const GranularAggregate<Shape>& agg, Vec3d p, Vec3
             if (s.kind == GrainSojourn::absorbed) {
                 gi.absorbed = true;
                 gi.x_o = q;
+                gi.survival = RGBd(0.0);
                 if constexpr (requires { cb.on_interaction(gi); }) (void)cb.on_interaction(gi);
                 return events >= max_events ? PhotonWalkEnd::max_events : PhotonWalkEnd::absorbed;
             }
@@ -262,6 +272,7 @@ PhotonWalkEnd ept_photon_walk(const GranularAggregate<Shape>& agg, Vec3d p, Vec3
             }
             gi.x_o = s.p + t_out * s.d;
             gi.w_o = s.d;
+            set_survival();
             if (!seg(s.p, gi.x_o)) return PhotonWalkEnd::stopped;
             p = gi.x_o;
             d = s.d;
@@ -295,7 +306,9 @@ struct FreeFlightStats {
 /// points between the spheres with uniform directions; the first `skip` interactions of each
 /// path are discarded (randomization), the next `per_path` recorded. z per interaction =
 /// distance from the previous exit point to the entry point x_i + the teleport component
-/// (x_o - x_i) . w_i (0 if absorbed): its mean estimates Meng15 Eq. 4's lambda_t = 1/sigma_t.
+/// (x_o - x_i) . w_i times the channel-mean survival weight of the interaction (0 if absorbed;
+/// 1 for lossless grains): its mean estimates Meng15 Eq. 4's channel-mean lambda_t =
+/// lambda_beta + alpha_s lambda_s.
 /// Deterministic for a seed; paths are independent (counter-based generators).
 template <BoundaryShape Shape>
 [[nodiscard]] FreeFlightStats ept_free_flights(const GranularAggregate<Shape>& agg, std::uint64_t paths, int skip,
@@ -325,7 +338,8 @@ template <BoundaryShape Shape>
             double* sum_f;
             bool on_interaction(const GrainInteraction& gi) {
                 if (gi.index > skip) {
-                    const double tele = gi.absorbed ? 0.0 : glm::dot(gi.x_o - gi.x_i, gi.w_i);
+                    const double surv = (gi.survival[0] + gi.survival[1] + gi.survival[2]) / 3.0;
+                    const double tele = gi.absorbed ? 0.0 : surv * glm::dot(gi.x_o - gi.x_i, gi.w_i);
                     zs->push_back(gi.flight + tele);
                     *sum_f += gi.flight;
                 }
