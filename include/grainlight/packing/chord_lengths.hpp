@@ -59,6 +59,7 @@ struct ChordMeasurement {
     [[nodiscard]] double mean() const noexcept {
         return entries ? void_length / double(entries) : std::numeric_limits<double>::quiet_NaN();
     }
+    /// Add another measurement's totals (merge per-block results in a fixed order).
     void merge(const ChordMeasurement& o) noexcept {
         void_length += o.void_length;
         entries += o.entries;

@@ -44,8 +44,11 @@ public:
                                    [](double v, const PeriodicTile& t) { return v < t.packing_fraction(); });
         tiles_.insert(it, std::move(tile));
     }
+    /// Number of tiles.
     [[nodiscard]] std::size_t size() const noexcept { return tiles_.size(); }
+    /// True if the library holds no tile.
     [[nodiscard]] bool empty() const noexcept { return tiles_.empty(); }
+    /// Tile i in ascending order of packing rate (std::out_of_range if i >= size()).
     [[nodiscard]] const PeriodicTile& tile(std::size_t i) const { return tiles_.at(i); }
     /// Packing rates of the tiles, ascending.
     [[nodiscard]] std::vector<double> fractions() const {

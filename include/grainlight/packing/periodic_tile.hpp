@@ -49,6 +49,7 @@ struct TileHit {
     double t_exit = std::numeric_limits<double>::infinity();
     std::uint32_t sphere = 0;
     Vec3i64 tile{0, 0, 0};
+    /// True if a sphere was hit.
     explicit operator bool() const noexcept { return hit; }
 };
 
@@ -171,10 +172,15 @@ public:
         build_grid(cell_size_in_radii);
     }
 
+    /// Tile side L (world units).
     [[nodiscard]] double side() const noexcept { return side_; }
+    /// Sphere radius R (world units).
     [[nodiscard]] double radius() const noexcept { return radius_; }
+    /// Number of spheres N in the tile.
     [[nodiscard]] std::size_t size() const noexcept { return centers_.size(); }
+    /// Centre of sphere i in the tile, in [0, L)^3.
     [[nodiscard]] const Vec3d& center(std::size_t i) const noexcept { return centers_[i]; }
+    /// All centres, in [0, L)^3.
     [[nodiscard]] const std::vector<Vec3d>& centers() const noexcept { return centers_; }
     /// Packing rate f = N (4/3) pi R^3 / L^3.
     [[nodiscard]] double packing_fraction() const noexcept {

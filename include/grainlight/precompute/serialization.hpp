@@ -83,6 +83,7 @@ inline constexpr std::size_t container_header_size = 48;
 /// Appends trivially copyable values (little-endian host layout) to a growing byte buffer.
 class ByteWriter {
 public:
+    /// Append one value (its in-memory, little-endian bytes).
     template <class T>
     ByteWriter& put(const T& v) {
         static_assert(std::is_trivially_copyable_v<T>);
@@ -100,7 +101,9 @@ public:
         if (n) std::memcpy(bytes_.data() + old, v, n * sizeof(T));
         return *this;
     }
+    /// The bytes written so far.
     [[nodiscard]] const std::vector<unsigned char>& bytes() const noexcept { return bytes_; }
+    /// Move the bytes out (the writer is left empty).
     [[nodiscard]] std::vector<unsigned char>&& take() noexcept { return std::move(bytes_); }
 
 private:
@@ -116,6 +119,7 @@ public:
     explicit ByteReader(const std::vector<unsigned char>& v, std::string context = "payload")
         : ByteReader(v.data(), v.size(), std::move(context)) {}
 
+    /// Read one value; format_error if fewer than sizeof(T) bytes remain.
     template <class T>
     [[nodiscard]] T get() {
         static_assert(std::is_trivially_copyable_v<T>);
@@ -134,12 +138,15 @@ public:
         if (n) std::memcpy(out.data(), data_ + pos_, static_cast<std::size_t>(n) * sizeof(T));
         pos_ += static_cast<std::size_t>(n) * sizeof(T);
     }
+    /// Bytes not read yet.
     [[nodiscard]] std::size_t remaining() const noexcept { return size_ - pos_; }
+    /// Bytes read so far.
     [[nodiscard]] std::size_t position() const noexcept { return pos_; }
     /// Throws unless every byte was consumed (trailing garbage means a layout mismatch).
     void expect_end() const {
         if (pos_ != size_) fail(std::to_string(size_ - pos_) + " unexpected trailing bytes");
     }
+    /// Throw format_error "<context>: <what>".
     [[noreturn]] void fail(const std::string& what) const { throw format_error(context_ + ": " + what); }
 
 private:

@@ -104,6 +104,7 @@ struct TiledHit {
     bool hit = false;
     double t = std::numeric_limits<double>::infinity();  ///< ray parameter of the grain hit
     TiledGrain grain{};                                 ///< the grain hit
+    /// True if a grain was hit.
     explicit operator bool() const noexcept { return hit; }
 };
 
@@ -138,9 +139,13 @@ public:
           mix_(std::span<const double>(weights_)),
           seed_(seed) {}
 
+    /// The periodic tile of bounding spheres.
     [[nodiscard]] const PeriodicTile& tile() const noexcept { return tile_; }
+    /// The voxel classifier of the aggregate boundary.
     [[nodiscard]] const Boundary& boundary() const noexcept { return boundary_; }
+    /// Number of exemplar grains (size of the mixing weights).
     [[nodiscard]] std::size_t exemplar_count() const noexcept { return weights_.size(); }
+    /// Seed of the per-grain hash.
     [[nodiscard]] std::uint64_t seed() const noexcept { return seed_; }
 
     /// Is the grain (sphere, home tile) part of the aggregate (its centre inside the boundary)?
