@@ -28,3 +28,18 @@ if(TARGET slab OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/ex
                    -P ${CMAKE_CURRENT_SOURCE_DIR}/integrators/check_slab_json.cmake)
   set_tests_properties(slab_json_index_matched slab_json_refractive PROPERTIES LABELS "example;integrators")
 endif()
+
+# The rendered example: a tiny run must write the EXR and PNG and print its JSON line; a bad
+# --quality must exit non-zero with a message naming the argument.
+if(TARGET vpt_sphere_medium OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/vpt_sphere_medium.cpp))
+  add_test(NAME vpt_sphere_medium_tiny
+           COMMAND $<TARGET_FILE:vpt_sphere_medium> --spp 1 --threads 2 --out ${CMAKE_CURRENT_BINARY_DIR}/vpt_sphere_medium_tiny)
+  set_tests_properties(vpt_sphere_medium_tiny PROPERTIES
+                       PASS_REGULAR_EXPRESSION "\"mean_rgb\":\\[0\\.[0-9]+,0\\.[0-9]+,0\\.[0-9]+\\].*vpt_sphere_medium\\.png"
+                       LABELS "example;integrators")
+  add_test(NAME vpt_sphere_medium_bad_quality COMMAND $<TARGET_FILE:vpt_sphere_medium> --quality fast --spp 1)
+  set_tests_properties(vpt_sphere_medium_bad_quality PROPERTIES PASS_REGULAR_EXPRESSION "--quality = 'fast'"
+                       LABELS "example;integrators")
+  add_test(NAME vpt_sphere_medium_bad_quality_exit COMMAND $<TARGET_FILE:vpt_sphere_medium> --quality fast --spp 1)
+  set_tests_properties(vpt_sphere_medium_bad_quality_exit PROPERTIES WILL_FAIL TRUE LABELS "example;integrators")
+endif()

@@ -84,7 +84,9 @@ struct LightSample {
 ///     (or the environment when `hit` is a miss);
 ///   - `emitted(hit, w)`: radiance leaving the hit emitter along -w toward the path (w = the
 ///     path's direction of travel when it hit);
-///   - `environment(w)`: radiance arriving along a ray that escapes in direction w.
+///   - `environment(w)`: radiance arriving along a ray that escapes in direction w;
+///   - `occluded(p, q)`: any surface strictly between points p and q (plain shadow test; the VPT
+///     uses its own medium-aware shadow_transmittance, which lets index-matched boundaries pass).
 template <class Sc>
 concept LitScene = WalkScene<Sc> && requires(const Sc& s, const Vec3<typename Sc::Float>& p,
                                              const Vec3<typename Sc::Float>& u,
@@ -93,6 +95,7 @@ concept LitScene = WalkScene<Sc> && requires(const Sc& s, const Vec3<typename Sc
     { s.light_pdf(p, p, h) } -> std::convertible_to<typename Sc::Float>;
     { s.emitted(h, p) } -> std::same_as<typename Sc::Spectrum>;
     { s.environment(p) } -> std::same_as<typename Sc::Spectrum>;
+    { s.occluded(p, p) } -> std::convertible_to<bool>;
 };
 
 }  // namespace grainlight
