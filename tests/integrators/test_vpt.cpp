@@ -309,3 +309,25 @@ TEST_CASE("Photon walks from lights: flux on a patch matches the closed-form flu
         CHECK(measure(s, patch, n) == Approx(I * omega).epsilon(4 / std::sqrt(hits)));
     }
 }
+
+TEST_CASE("Delta lights on a diffuse plane: NEE gives the closed-form radiance", "[vpt][lights]") {
+    // Lambertian plane (albedo rho) lit by a directional light (irradiance E at normal incidence,
+    // arriving at 60 degrees) or a point light (intensity I at height h): L = rho/pi * E cos(theta)
+    // and L = rho/pi * I cos(theta) / r^2. Nothing else in the scene, so every sample is exact.
+    const float rho = 0.5f, E = 2.0f, I = 3.0f, h = 2.0f;
+    const Vec3f view_from(0.3f, 1.0f, 1.0f);
+    auto radiance_at_origin = [&](const SceneT& s) {
+        Rng rng = Rng::from_key(3);
+        const Ray<float> r(view_from, glm::normalize(-view_from));
+        return vpt_radiance(s, r, -1, rng)[1];
+    };
+    SceneT a;
+    a.add_shape(QuadShape<float>(Vec3f(-5, 0, -5), Vec3f(0, 0, 10), Vec3f(10, 0, 0)), Material<float, RGB>::diffuse(RGB(rho)));
+    a.add_light(SceneT::LightT::directional_light(Vec3f(std::sqrt(3.0f) / 2, -0.5f, 0.0f), RGB(E)));
+    CHECK(radiance_at_origin(a) == Approx(rho / pi_v<float> * E * 0.5f).epsilon(1e-4));
+    SceneT b;
+    b.add_shape(QuadShape<float>(Vec3f(-5, 0, -5), Vec3f(0, 0, 10), Vec3f(10, 0, 0)), Material<float, RGB>::diffuse(RGB(rho)));
+    b.add_light(SceneT::LightT::point_light(Vec3f(1.0f, h, 0.0f), RGB(I)));
+    const float r2 = 1.0f + h * h, cos_t = h / std::sqrt(r2);
+    CHECK(radiance_at_origin(b) == Approx(rho / pi_v<float> * I * cos_t / r2).epsilon(1e-4));
+}
