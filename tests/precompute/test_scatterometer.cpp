@@ -276,3 +276,44 @@ TEST_CASE("glass bead lambda_s against an independent deterministic Fresnel-seri
     CHECK(series(1.5) == Approx(1.424).margin(0.001));
     CHECK(series(1.46) == Approx(1.440).margin(0.001));
 }
+
+TEST_CASE("convex mesh grains: beta = S / (4 pi) (Cauchy's projected-area theorem)", "[scatterometer][mesh]") {
+    // For a convex body under uniformly random rotation the mean projected area is S/4 (Cauchy),
+    // so a ray uniform over the unit cross section hits it with probability S / (4 pi).
+    // Meshes: tests/data/grains_cube.obj (S = 8, beta = 2/pi), grains_octahedron.obj
+    // (S = 4 sqrt 3, beta = sqrt(3)/pi), and the procedural sphere mesh (level 3).
+    const std::string dir = GRAINLIGHT_TEST_DATA_DIR;
+    const auto cube = load_obj<float>(dir + "/grains_cube.obj");
+    const auto octa = load_obj<float>(dir + "/grains_octahedron.obj");
+    CHECK(cube.area() == Approx(8.0).epsilon(1e-6));
+    CHECK(octa.area() == Approx(4.0 * std::sqrt(3.0)).epsilon(1e-6));
+    const auto ball = make_grain_mesh<float>(GrainShape::sphere, 0.8f, 1, 3);
+    for (const auto* m : {&cube, &octa, &ball}) {
+        const auto s = run_scatterometer(ScatterometerGrain::mesh(*m, GrainMaterial::make_dielectric(1.5)), config(100000, 31));
+        CHECK(s.beta() == Approx(m->area() / (4 * pi_v<double>)).margin(4 * s.beta_stderr()));
+        CHECK(s.alpha_s_avg() == Approx(1.0).margin(1e-4));
+        // Without random rotation the rays are still isotropic, so beta is unchanged.
+        auto c = config(100000, 32);
+        c.random_rotation = false;
+        const auto s2 = run_scatterometer(ScatterometerGrain::mesh(*m, GrainMaterial::make_dielectric(1.5)), c);
+        CHECK(s2.beta() == Approx(m->area() / (4 * pi_v<double>)).margin(4 * s2.beta_stderr()));
+    }
+}
+
+TEST_CASE("mixture lambda_s and Phi are weighted by w beta alpha", "[scatterometer][mixture]") {
+    const auto a = run_scatterometer(ScatterometerGrain::sphere(1.0, GrainMaterial::make_dielectric(1.5)), config(20000, 41));
+    const auto b = run_scatterometer(
+        ScatterometerGrain::sphere(0.6, GrainMaterial::make_absorbing_dielectric(1.3, RGBd(0.8))), config(20000, 42));
+    const std::vector<GrainStats> both{a, b};
+    const std::vector<double> w{0.3, 0.7};
+    const auto m = mix_grain_stats(both, w);
+    const double wa = 0.3 * a.beta() * a.alpha_s(1), wb = 0.7 * b.beta() * b.alpha_s(1);
+    CHECK(m.teleport_along(1) == Approx((wa * a.teleport_along(1) + wb * b.teleport_along(1)) / (wa + wb)));
+    CHECK(m.g(1) == Approx((wa * a.g(1) + wb * b.g(1)) / (wa + wb)));
+    // Phi of the mixture is the same mixture of the component tables.
+    const auto pa = a.phase<double, RGBd>(), pb = b.phase<double, RGBd>(), pm = m.phase<double, RGBd>();
+    for (double mu : {-0.9, -0.2, 0.5, 0.99}) {
+        const double expected = (wa * pa.pdf_cos_theta(mu, 1) + wb * pb.pdf_cos_theta(mu, 1)) / (wa + wb);
+        CHECK(pm.pdf_cos_theta(mu, 1) == Approx(expected).epsilon(1e-9));
+    }
+}
