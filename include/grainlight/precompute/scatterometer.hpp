@@ -312,8 +312,9 @@ public:
         n = Vec3d(h.n_geom);
         return double(h.t);
     }
-    /// Offset used to leave a surface without re-hitting it.
-    [[nodiscard]] double surface_epsilon() const noexcept { return bvh_ ? 2e-5 : 1e-10; }
+    /// Offset used to leave a surface without re-hitting it (meshes: relative to their size, well
+    /// above the float round-off of the watertight test).
+    [[nodiscard]] double surface_epsilon() const noexcept { return bvh_ ? 2e-5 * mesh_radius_ : 1e-10; }
 
 private:
     ScatterometerGrain() = default;
