@@ -92,7 +92,7 @@ inline constexpr double g7_w[4] = {0.129484966168869693, 0.279705391489276668, 0
 class BulkIntegrand {
 public:
     BulkIntegrand(const ParticleModel& model, double lambda_um, std::span<const double> theta)
-        : model_(model), lambda_(lambda_um), theta_(theta.begin(), theta.end()), mu_(theta.size()) {
+        : model_(model), theta_(theta.begin(), theta.end()), mu_(theta.size()) {
         for (std::size_t i = 0; i < theta_.size(); ++i)
             mu_[i] = i == 0 && theta_[i] == 0 ? 1.0 : (theta_[i] >= pi_v<double> ? -1.0 : std::cos(theta_[i]));
         k_ = 2 * pi_v<double> * model.host_index / lambda_um;
@@ -123,7 +123,6 @@ public:
 
 private:
     ParticleModel model_;
-    double lambda_;
     std::vector<double> theta_, mu_;
     double k_ = 0;
     std::optional<GoaTable> goa_;
