@@ -83,11 +83,11 @@ namespace detail {
     const double C = glm::dot(r, r) - diam * diam;
     constexpr double inf = std::numeric_limits<double>::infinity();
     if (B < 0 && C <= 0) return 0.0;  // touching/overlapping by round-off and approaching
+    if (A >= 0 && B >= 0) return inf;  // separating faster than growing (the common case)
     const double disc = B * B - A * C;
     if (disc < 0) return inf;
     const double sq = std::sqrt(disc);
     if (A < 0) return B >= 0 ? (-B - sq) / A : C / (-B + sq);
-    if (B >= 0) return inf;
     return C / (-B + sq);
 }
 
@@ -148,34 +148,32 @@ public:
     static constexpr std::uint32_t no_partner = UINT32_MAX;
 
     LsSimulation(std::vector<Vec3d> x, double diam0, double box, double max_diam, double growth, Rng& rng)
-        : n_(x.size()), box_(box), d0_(diam0), a_(growth), x_(std::move(x)) {
+        : n_(x.size()), box_(box), d0_(diam0), a_(growth) {
         m_ = static_cast<int>(grid_cells_per_axis(box, max_diam, n_));
         w_ = box / m_;
-        v_.resize(n_);
-        tl_.assign(n_, 0.0);
+        p_.resize(n_);
+        for (std::size_t i = 0; i < n_; ++i) p_[i].x = x[i];
         ncoll_.assign(n_, 0);
         ev_.resize(n_);
         cell_.resize(n_);
         head_.assign(std::size_t(m_) * m_ * m_, no_partner);
-        next_.assign(n_, no_partner);
-        prev_.assign(n_, no_partner);
         // Maxwell-Boltzmann velocities (Box-Muller), zero momentum, kT = 1.
         Vec3d mean(0.0);
-        for (auto& vi : v_) {
+        for (auto& pi : p_) {
             for (int a = 0; a < 3; ++a) {
                 const double u1 = 1.0 - rng.uniform<double>(), u2 = rng.uniform<double>();
-                vi[a] = std::sqrt(-2.0 * std::log(u1)) * std::cos(2 * pi_v<double> * u2);
+                pi.v[a] = std::sqrt(-2.0 * std::log(u1)) * std::cos(2 * pi_v<double> * u2);
             }
-            mean += vi;
+            mean += pi.v;
         }
         mean /= double(n_);
-        for (auto& vi : v_) vi -= mean;
+        for (auto& pi : p_) pi.v -= mean;
         rescale_velocities();
         for (std::size_t i = 0; i < n_; ++i) {
             std::array<int, 3> c{};
             for (int a = 0; a < 3; ++a) {
-                x_[i][a] -= box_ * std::floor(x_[i][a] / box_);
-                c[a] = std::clamp(static_cast<int>(x_[i][a] / w_), 0, m_ - 1);
+                p_[i].x[a] -= box_ * std::floor(p_[i].x[a] / box_);
+                c[a] = std::clamp(static_cast<int>(p_[i].x[a] / w_), 0, m_ - 1);
             }
             cell_[i] = c;
             link(std::uint32_t(i));
@@ -226,7 +224,7 @@ public:
                 const double dt = t_ - t_checkpoint_start;
                 double v2 = 0;
                 sync_all(t_);
-                for (const auto& vi : v_) v2 += glm::dot(vi, vi);
+                for (const auto& pi : p_) v2 += glm::dot(pi.v, pi.v);
                 const double kT = v2 / (3.0 * double(n_));
                 z_ = dt > 0 ? 1.0 + virial_ / (3.0 * double(n_) * kT * dt) : std::numeric_limits<double>::infinity();
                 rebase();
@@ -248,7 +246,8 @@ public:
     /// Centres wrapped into [0, box).
     [[nodiscard]] std::vector<Vec3d> positions() {
         sync_all(t_);
-        std::vector<Vec3d> out = x_;
+        std::vector<Vec3d> out(n_);
+        for (std::size_t i = 0; i < n_; ++i) out[i] = p_[i].x;
         for (auto& p : out)
             for (int a = 0; a < 3; ++a) {
                 p[a] -= box_ * std::floor(p[a] / box_);
@@ -258,6 +257,13 @@ public:
     }
 
 private:
+    /// Per-sphere state in one cache line: position at time tl, velocity, cell-list links.
+    struct alignas(64) Particle {
+        Vec3d x{0.0};
+        double tl = 0;
+        Vec3d v{0.0};
+        std::uint32_t next = no_partner, prev = no_partner;
+    };
     struct Event {
         double time = std::numeric_limits<double>::infinity();
         std::uint32_t partner = no_partner;
@@ -271,22 +277,22 @@ private:
     }
     void link(std::uint32_t i) noexcept {
         const auto id = cell_id(cell_[i]);
-        prev_[i] = no_partner;
-        next_[i] = head_[id];
-        if (head_[id] != no_partner) prev_[head_[id]] = i;
+        p_[i].prev = no_partner;
+        p_[i].next = head_[id];
+        if (head_[id] != no_partner) p_[head_[id]].prev = i;
         head_[id] = i;
     }
     void unlink(std::uint32_t i) noexcept {
         const auto id = cell_id(cell_[i]);
-        if (prev_[i] != no_partner)
-            next_[prev_[i]] = next_[i];
+        if (p_[i].prev != no_partner)
+            p_[p_[i].prev].next = p_[i].next;
         else
-            head_[id] = next_[i];
-        if (next_[i] != no_partner) prev_[next_[i]] = prev_[i];
+            head_[id] = p_[i].next;
+        if (p_[i].next != no_partner) p_[p_[i].next].prev = p_[i].prev;
     }
     void sync(std::uint32_t i, double t) noexcept {
-        x_[i] += v_[i] * (t - tl_[i]);
-        tl_[i] = t;
+        p_[i].x += p_[i].v * (t - p_[i].tl);
+        p_[i].tl = t;
     }
     void sync_all(double t) noexcept {
         for (std::uint32_t i = 0; i < n_; ++i) sync(i, t);
@@ -295,28 +301,28 @@ private:
     void rebase() noexcept {
         d0_ = diameter(t_);
         t_ = 0;
-        std::fill(tl_.begin(), tl_.end(), 0.0);
+        for (auto& pi : p_) pi.tl = 0.0;
     }
     void rescale_velocities() noexcept {
         double v2 = 0;
-        for (const auto& vi : v_) v2 += glm::dot(vi, vi);
+        for (const auto& pi : p_) v2 += glm::dot(pi.v, pi.v);
         const double s = v2 > 0 ? std::sqrt(3.0 * double(n_) / v2) : 1.0;
-        for (auto& vi : v_) vi *= s;
+        for (auto& pi : p_) pi.v *= s;
     }
     void cross_cell(std::uint32_t i, int axis) noexcept {
         sync(i, t_);
         unlink(i);
         auto& c = cell_[i][axis];
-        if (v_[i][axis] > 0) {
+        if (p_[i].v[axis] > 0) {
             if (++c == m_) {
                 c = 0;
-                x_[i][axis] -= box_;
+                p_[i].x[axis] -= box_;
                 ++ncoll_[i];  // position representation changed: partners' image shifts are stale
             }
         } else {
             if (--c < 0) {
                 c = m_ - 1;
-                x_[i][axis] += box_;
+                p_[i].x[axis] += box_;
                 ++ncoll_[i];
             }
         }
@@ -325,13 +331,13 @@ private:
     void collide(std::uint32_t i, std::uint32_t j, const std::array<std::int8_t, 3>& shift) noexcept {
         sync(i, t_);
         sync(j, t_);
-        const Vec3d r = x_[j] + Vec3d(shift[0], shift[1], shift[2]) * box_ - x_[i];
+        const Vec3d r = p_[j].x + Vec3d(shift[0], shift[1], shift[2]) * box_ - p_[i].x;
         const double len = std::sqrt(glm::dot(r, r));
         const Vec3d nrm = r / len;
-        const double un = glm::dot(v_[j] - v_[i], nrm);
+        const double un = glm::dot(p_[j].v - p_[i].v, nrm);
         const double dp = std::max(a_ - un, 0.0);  // impulse per sphere (m = 1)
-        v_[i] -= dp * nrm;
-        v_[j] += dp * nrm;
+        p_[i].v -= dp * nrm;
+        p_[j].v += dp * nrm;
         virial_ += diameter(t_) * dp;
         ++ncoll_[i];
         ++ncoll_[j];
@@ -344,16 +350,17 @@ private:
         Event e;
         // Cell-boundary crossing.
         for (int a = 0; a < 3; ++a) {
-            const double va = v_[i][a];
+            const double va = p_[i].v[a];
             if (va == 0) continue;
             const double b = (cell_[i][a] + (va > 0 ? 1 : 0)) * w_;
-            const double tau = std::max((b - x_[i][a]) / va, 0.0);
+            const double tau = std::max((b - p_[i].x[a]) / va, 0.0);
             if (t_ + tau < e.time) {
                 e.time = t_ + tau;
                 e.axis = a;
             }
         }
         const double diam = diameter(t_);
+        const Vec3d xi = p_[i].x, vi = p_[i].v;
         for (int dz = -1; dz <= 1; ++dz)
             for (int dy = -1; dy <= 1; ++dy)
                 for (int dx = -1; dx <= 1; ++dx) {
@@ -369,10 +376,11 @@ private:
                         }
                     }
                     const Vec3d shift = Vec3d(sh[0], sh[1], sh[2]) * box_;
-                    for (std::uint32_t j = head_[cell_id(q)]; j != no_partner; j = next_[j]) {
+                    for (std::uint32_t j = head_[cell_id(q)]; j != no_partner; j = p_[j].next) {
                         if (j == i) continue;
-                        const Vec3d xj = x_[j] + v_[j] * (t_ - tl_[j]) + shift;
-                        const double tau = ls_collision_time(xj - x_[i], v_[j] - v_[i], diam, a_);
+                        const Particle& pj = p_[j];
+                        const Vec3d xj = pj.x + pj.v * (t_ - pj.tl) + shift;
+                        const double tau = ls_collision_time(xj - xi, pj.v - vi, diam, a_);
                         if (t_ + tau < e.time) {
                             e.time = t_ + tau;
                             e.partner = j;
@@ -402,12 +410,11 @@ private:
     double t_ = 0;
     double virial_ = 0, z_ = 1;
     std::uint64_t events_ = 0, collisions_ = 0;
-    std::vector<Vec3d> x_, v_;
-    std::vector<double> tl_;
+    std::vector<Particle> p_;
     std::vector<std::uint64_t> ncoll_;  // per-sphere version: collisions + periodic wraps
     std::vector<Event> ev_;
     std::vector<std::array<int, 3>> cell_;
-    std::vector<std::uint32_t> head_, next_, prev_;
+    std::vector<std::uint32_t> head_;
     EventHeap heap_;
     bool heap_ready_ = false;
 };
