@@ -27,7 +27,7 @@ int main(int argc, char** argv) {
         cli.option("albedo", "single-scattering albedo a in [0, 1]", "0.9")
             .option("optical-depth", "optical depth B = sigma_t * thickness in (0, inf]; 'inf' = semi-infinite", "1")
             .option("g", "Henyey-Greenstein asymmetry parameter in (-1, 1)", "0")
-            .option("ior", "relative index of the slab in [1, 10] (1 = index-matched)", "1")
+            .option("ior", "relative index n_slab / n_outside in (0, 10] (1 = index-matched)", "1")
             .option("mu0", "cosine of the collimated incidence outside the slab, in (0, 1]", "1")
             .option("paths", "number of photon paths (>= 2)", "1000000")
             .common_options("out");

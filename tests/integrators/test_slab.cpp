@@ -277,6 +277,7 @@ TEST_CASE("Refractive slabs n = 1.33 and 1.5 agree with an independent plane-par
         {0.9, 1.0, 0.0, 1.33, 1.0},  {0.9, 4.0, 0.5, 1.33, 0.5}, {0.95, inf, 0.0, 1.33, 1.0},
         {0.9, 1.0, 0.9, 1.5, 0.5},   {0.95, 4.0, 0.7, 1.5, 1.0}, {0.9, inf, 0.5, 1.5, 0.5},
         {0.99, 4.0, 0.9, 1.0, 0.5},  // index-matched, strongly forward, oblique
+        {0.9, 2.0, 0.5, 0.75, 0.8},  // slab of lower index than outside (a bubble layer)
     };
     int k = 0;
     for (const Case& c : cases) {
@@ -324,7 +325,9 @@ TEST_CASE("Bad slab parameters throw invalid_argument naming the parameter", "[s
     p.optical_depth = -1;
     CHECK(message_of(p).find("optical_depth") != std::string::npos);
     p = {};
-    p.ior = 0.5;
+    p.ior = 0.0;
+    CHECK(message_of(p).find("ior") != std::string::npos);
+    p.ior = 12.0;
     CHECK(message_of(p).find("ior") != std::string::npos);
     p = {};
     p.optical_depth = std::nan("");

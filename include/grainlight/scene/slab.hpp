@@ -96,7 +96,7 @@ struct SlabParams {
     double albedo = 0.9;         ///< single-scattering albedo a in [0, 1]
     double optical_depth = 1.0;  ///< B = sigma_t * thickness in (0, inf]; inf = semi-infinite
     double g = 0.0;              ///< Henyey-Greenstein asymmetry in (-1, 1)
-    double ior = 1.0;            ///< relative index n_slab / n_outside in [1, 10]
+    double ior = 1.0;            ///< relative index n_slab / n_outside in (0, 10] (1 = index-matched)
     double mu0 = 1.0;            ///< cosine of the incidence angle outside the slab, in (0, 1]
 };
 
@@ -163,7 +163,7 @@ private:
         check_argument(p.albedo >= 0.0 && p.albedo <= 1.0, "slab", "albedo", p.albedo, "[0, 1]");
         check_argument(p.optical_depth > 0.0, "slab", "optical_depth", p.optical_depth, "(0, inf] (inf = semi-infinite)");
         check_argument(p.g > -1.0 && p.g < 1.0, "slab", "g", p.g, "(-1, 1)");
-        check_argument(p.ior >= 1.0 && p.ior <= 10.0, "slab", "ior", p.ior, "[1, 10]");
+        check_argument(p.ior > 0.0 && p.ior <= 10.0, "slab", "ior", p.ior, "(0, 10]");
         check_argument(p.mu0 > 0.0 && p.mu0 <= 1.0, "slab", "mu0", p.mu0, "(0, 1]");
         if (std::isinf(p.optical_depth))
             check_argument(p.albedo < 1.0, "slab", "albedo", p.albedo, "[0, 1) for a semi-infinite slab");
