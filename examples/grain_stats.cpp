@@ -135,7 +135,12 @@ int main(int argc, char** argv) {
                         stats.teleport_along(c), stats.g(c));
         std::printf("  terminated (bounce limit or mesh leak, counted as absorbed): %.2g %.2g %.2g\n", stats.terminated[0],
                     stats.terminated[1], stats.terminated[2]);
-        if (!grain.paper_column.empty()) std::printf("  (Meng15 Table 1 column: %s; see meng15_table1_grain_stats)\n", grain.paper_column.c_str());
+        if (const auto* col = gl::find_meng15_table1(grain.paper_column)) {
+            std::printf("  channel average vs Meng15 Table 1 (%s):\n", col->name);
+            std::printf("    beta %.2f (paper %.2f), lambda_delta %.2f (paper %.2f), lambda_s %.2f (paper %.2f), alpha_s %.2f (paper %.2f)\n",
+                        stats.beta(), col->beta, stats.lambda_delta(), col->lambda_delta, stats.lambda_s_avg(),
+                        col->lambda_s, stats.alpha_s_avg(), col->alpha_s);
+        }
         std::printf("  wrote %s, %s\n", (out / (stem + ".scat")).c_str(), csv_path.c_str());
         Json j;
         j.num("beta", stats.beta())

@@ -22,18 +22,8 @@ namespace gl = grainlight;
 using namespace gl_examples;
 
 namespace {
-struct PaperColumn {
-    const char* preset;
-    const char* paper_name;
-    double lambda_delta, lambda_s, alpha_s, beta;  // Meng15 Table 1
-};
-// Meng15 Table 1 (ACM TOG 34(4), 2015), rows lambda_delta, lambda_s, alpha_s, beta.
-constexpr PaperColumn paper[] = {
-    {"glass-bead", "glass beads", 0.00, 1.44, 1.00, 1.00}, {"flour", "flour", 0.87, 0.18, 1.00, 0.66},
-    {"salt", "pink salt", 0.97, 1.00, 0.99, 0.53},         {"sand", "sand", 0.85, 0.50, 0.68, 0.63},
-    {"snow", "snow", 0.86, 1.40, 1.00, 0.65},              {"sugar", "cane sugar", 0.77, 1.17, 1.00, 0.71},
-    {"brown-sugar", "brown sugar", 0.77, 0.88, 0.76, 0.71},
-};
+// Our preset standing in for each Table 1 column (geometry/grains.hpp), in the table's order.
+constexpr const char* presets[] = {"glass-bead", "flour", "salt", "sand", "snow", "sugar", "brown-sugar"};
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -56,9 +46,10 @@ int main(int argc, char** argv) {
                     (unsigned long long)rays, (unsigned long long)seed, threads);
         std::printf("%-12s %-12s | %6s %6s | %6s %6s | %6s %6s | %6s %6s | %6s\n", "grain", "paper", "l_dlt", "paper",
                     "l_s", "paper", "a_s", "paper", "beta", "paper", "g");
-        ProgressBar bar("Table 1 grains", std::size(paper) * rays);
-        for (const auto& col : paper) {
-            const gl::GrainPreset p = gl::grain_preset(col.preset);
+        ProgressBar bar("Table 1 grains", std::size(presets) * rays);
+        for (const char* preset : presets) {
+            const gl::GrainPreset p = gl::grain_preset(preset);
+            const gl::Meng15Table1Column& col = *gl::find_meng15_table1(p.paper_column);
             const auto grain = gl::ScatterometerGrain::procedural(p.shape, p.radius, p.material, p.seed);
             gl::ScatterometerConfig cfg;
             cfg.rays = rays;
@@ -71,19 +62,19 @@ int main(int argc, char** argv) {
             const double t0 = bar.seconds();
             const auto s = gl::run_scatterometer(grain, cfg);
             const double secs = bar.seconds() - t0;
-            gl::save_grain_stats(out / (std::string(col.preset) + ".scat"), s);
+            gl::save_grain_stats(out / (std::string(preset) + ".scat"), s);
             const double se_ls = (s.teleport_along_stderr(0) + s.teleport_along_stderr(1) + s.teleport_along_stderr(2)) / 3;
-            std::printf("%-12s %-12s | %6.2f %6.2f | %6.2f %6.2f | %6.2f %6.2f | %6.2f %6.2f | %6.2f\n", col.preset,
-                        col.paper_name, s.lambda_delta(), col.lambda_delta, s.lambda_s_avg(), col.lambda_s,
+            std::printf("%-12s %-12s | %6.2f %6.2f | %6.2f %6.2f | %6.2f %6.2f | %6.2f %6.2f | %6.2f\n", preset,
+                        col.name, s.lambda_delta(), col.lambda_delta, s.lambda_s_avg(), col.lambda_s,
                         s.alpha_s_avg(), col.alpha_s, s.beta(), col.beta, s.g_avg());
-            csv.row_text({col.preset, col.paper_name, std::string(gl::to_string(p.shape)),
+            csv.row_text({preset, col.name, std::string(gl::to_string(p.shape)),
                           std::string(gl::to_string(p.material.kind)), std::to_string(p.radius),
                           std::to_string(s.beta()), std::to_string(col.beta), std::to_string(s.lambda_delta()),
                           std::to_string(col.lambda_delta), std::to_string(s.lambda_s_avg()), std::to_string(col.lambda_s),
                           std::to_string(s.alpha_s_avg()), std::to_string(col.alpha_s), std::to_string(s.g_avg()),
                           std::to_string(s.beta_stderr()), std::to_string(se_ls), std::to_string(secs)});
             Json j;
-            j.str("grain", col.preset)
+            j.str("grain", preset)
                 .num("beta", s.beta())
                 .num("beta_paper", col.beta)
                 .num("lambda_delta", s.lambda_delta())

@@ -300,6 +300,28 @@ struct GrainPreset {
     GrainMaterial material{};
 };
 
+/// One column of Meng15 Table 1 ("extracted statistics, averaged over wavelength and rounded to
+/// two digits"), lengths in units of the bounding-sphere radius.
+struct Meng15Table1Column {
+    const char* name;
+    double lambda_delta, lambda_s, alpha_s, beta;
+};
+
+/// Meng15 Table 1 (ACM TOG 34(4), 2015), all seven columns.
+inline constexpr Meng15Table1Column meng15_table1[] = {
+    {"glass beads", 0.00, 1.44, 1.00, 1.00}, {"flour", 0.87, 0.18, 1.00, 0.66},
+    {"pink salt", 0.97, 1.00, 0.99, 0.53},   {"sand", 0.85, 0.50, 0.68, 0.63},
+    {"snow", 0.86, 1.40, 1.00, 0.65},        {"cane sugar", 0.77, 1.17, 1.00, 0.71},
+    {"brown sugar", 0.77, 0.88, 0.76, 0.71},
+};
+
+/// The Table 1 column called `name`, or nullptr.
+[[nodiscard]] inline const Meng15Table1Column* find_meng15_table1(std::string_view name) noexcept {
+    for (const auto& c : meng15_table1)
+        if (name == c.name) return &c;
+    return nullptr;
+}
+
 /// The presets: glass-bead, snow, salt (pink salt), sugar (cane sugar), brown-sugar, sand, flour,
 /// rice. Pink salt gets a faint absorption, brown sugar and sand an interior absorbing (sand:
 /// also scattering) medium, flour is a white Lambertian grain.
