@@ -134,5 +134,18 @@ TEST_CASE("PackingLibrary: generate, nearest, save/load", "[library]") {
     CHECK_THROWS_AS(PeriodicTile::load(path), format_error);  // a library is not a tile
     std::filesystem::resize_file(path, std::filesystem::file_size(path) - 8);
     CHECK_THROWS_AS(PackingLibrary::load(path), format_error);
+    // Well-formed containers with hostile counts/sizes inside.
+    {
+        ByteWriter w;
+        w.put(std::uint64_t(1) << 60);
+        write_container_atomic(path, PackingLibrary::file_kind, PackingLibrary::file_kind_version, w.bytes());
+        CHECK_THROWS_WITH(PackingLibrary::load(path), Catch::Contains("exceeds"));
+    }
+    {
+        ByteWriter w;
+        w.put(std::uint64_t(1)).put(std::uint64_t(1) << 62).put(1.0);
+        write_container_atomic(path, PackingLibrary::file_kind, PackingLibrary::file_kind_version, w.bytes());
+        CHECK_THROWS_AS(PackingLibrary::load(path), format_error);
+    }
     std::filesystem::remove(path);
 }
