@@ -3,6 +3,7 @@
 // Henyey-Greenstein phase and smooth dielectric (Fresnel) boundaries (scene/slab.hpp).
 //
 //   slab --albedo A --optical-depth B --g G --ior N --mu0 M --paths P --seed S [--threads T]
+//        [--quality quick|full (default paths 1e6 | 1e7)] [--out DIR (also writes DIR/slab.csv)]
 //
 // B may be `inf` (semi-infinite). Prints one JSON line (the last line of stdout):
 //   {"R":..,"T":..,"R_stderr":..,"T_stderr":..,"paths":..,"seconds":..}
@@ -29,7 +30,7 @@ int main(int argc, char** argv) {
             .option("g", "Henyey-Greenstein asymmetry parameter in (-1, 1)", "0")
             .option("ior", "relative index n_slab / n_outside in (0, 10] (1 = index-matched)", "1")
             .option("mu0", "cosine of the collimated incidence outside the slab, in (0, 1]", "1")
-            .option("paths", "number of photon paths (>= 2)", "1000000")
+            .option("paths", "number of photon paths (>= 2)", "1000000 quick, 10000000 full")
             .common_options("out");
         cli.finish();
 
@@ -39,10 +40,10 @@ int main(int argc, char** argv) {
         p.g = cli.num("g", 0.0);
         p.ior = cli.num("ior", 1.0);
         p.mu0 = cli.num("mu0", 1.0);
-        const std::uint64_t paths = cli.integer("paths", 1000000);
+        const bool full = cli.full_quality();
+        const std::uint64_t paths = cli.integer("paths", full ? 10000000 : 1000000);
         if (paths < 2) throw gl_examples::cli_error("--paths = " + std::to_string(paths) + " must be >= 2");
         const std::uint64_t seed = cli.seed();
-        (void)cli.full_quality();  // validates --quality (the path count is set by --paths)
         const int threads = cli.threads();
         (void)threads;
         const grainlight::SlabProblem problem(p);  // throws invalid_argument naming the parameter
@@ -72,6 +73,13 @@ int main(int argc, char** argv) {
             .num("T_stderr", total.T.standard_error())
             .integer("paths", (long long)total.paths)
             .num("seconds", seconds);
+        if (cli.has("out")) {  // optional CSV record of the run
+            gl_examples::Csv csv({"albedo", "optical_depth", "g", "ior", "mu0", "paths", "seed", "R", "T", "R_stderr",
+                                  "T_stderr"});
+            csv.row({p.albedo, p.optical_depth, p.g, p.ior, p.mu0, double(total.paths), double(seed), total.R.mean(),
+                     total.T.mean(), total.R.standard_error(), total.T.standard_error()});
+            csv.write(cli.out_dir() / "slab.csv");
+        }
         std::cout << j.str() << std::endl;
         return 0;
     });
