@@ -3,6 +3,8 @@
 #include <catch2/catch.hpp>
 
 #include <cstdio>
+#include <cstring>
+#include <limits>
 #include <filesystem>
 #include <fstream>
 #include <vector>
@@ -316,4 +318,52 @@ TEST_CASE("mixture lambda_s and Phi are weighted by w beta alpha", "[scatteromet
         const double expected = (wa * pa.pdf_cos_theta(mu, 1) + wb * pb.pdf_cos_theta(mu, 1)) / (wa + wb);
         CHECK(pm.pdf_cos_theta(mu, 1) == Approx(expected).epsilon(1e-9));
     }
+}
+
+TEST_CASE("hostile payloads with valid checksums are rejected without crashing", "[scatterometer][io]") {
+    // The container checksum only guards against corruption; a crafted payload must still be
+    // parsed safely: absurd bin counts, sizes that exceed the data, trailing bytes, NaNs.
+    const auto s = run_scatterometer(ScatterometerGrain::sphere(0.7, GrainMaterial::make_dielectric(1.4)), config(2000, 1));
+    const auto good = encode_grain_stats(s);
+    const auto dir = std::filesystem::temp_directory_path() / "grainlight_test_scat_hostile";
+    std::filesystem::create_directories(dir);
+    auto try_payload = [&](std::vector<unsigned char> payload) {
+        write_container_atomic(dir / "h.scat", grain_stats_kind, grain_stats_version, payload);
+        CHECK_THROWS_AS(load_grain_stats(dir / "h.scat"), grainlight::format_error);
+    };
+    {
+        auto p = good;  // phase_bins = 2^31
+        const std::uint32_t huge = 0x80000000u;
+        std::memcpy(p.data(), &huge, 4);
+        try_payload(p);
+    }
+    {
+        auto p = good;  // tt_mu_bins = 1000, tt_along = 1000: within limits each, but arrays exceed the data
+        const std::uint32_t k = 1000;
+        std::memcpy(p.data() + 4, &k, 4);
+        std::memcpy(p.data() + 8, &k, 4);
+        try_payload(p);
+    }
+    {
+        auto p = good;  // trailing byte
+        p.push_back(0);
+        try_payload(p);
+    }
+    {
+        auto p = good;  // beta = NaN
+        const double nan = std::numeric_limits<double>::quiet_NaN();
+        std::memcpy(p.data() + 20 + 8, &nan, 8);
+        try_payload(p);
+    }
+    {
+        auto p = good;  // zero rays
+        const std::uint64_t zero = 0;
+        std::memcpy(p.data() + 20, &zero, 8);
+        try_payload(p);
+    }
+    try_payload({});
+    // and the unmodified payload loads
+    write_container_atomic(dir / "ok.scat", grain_stats_kind, grain_stats_version, good);
+    CHECK(encode_grain_stats(load_grain_stats(dir / "ok.scat")) == good);
+    std::filesystem::remove_all(dir);
 }
