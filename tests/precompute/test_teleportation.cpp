@@ -141,3 +141,26 @@ TEST_CASE("TT medium: sampled exit directions reproduce the scatterometer's mean
         CHECK(sum / n == Approx(s.g(0)).margin(0.01));
     }
 }
+
+TEST_CASE("TT medium: direction_pdf is the density of the sampled exit directions", "[teleportation]") {
+    // If w is drawn with solid-angle density p(w) > 0 everywhere, E[1 / p(w)] = 4 pi. A glass
+    // bead scatters into every direction (Fresnel reflection covers the sphere), so every cos
+    // theta bin of the table has mass.
+    const auto s = stats_of(1.0, GrainMaterial::make_dielectric(1.5), 100000, 12);
+    const TeleportationMedium<float> tt(s, 0.6, 1.0);
+    Rng rng = Rng::from_key(23);
+    const Ray<float> ray(Vec3f(0.0f), glm::normalize(Vec3f(1, 2, 3)));
+    double acc = 0, acc2 = 0;
+    int n = 0;
+    for (int i = 0; i < 400000; ++i) {
+        const auto it = tt.sample_interaction(ray, 1e30f, rng);
+        REQUIRE(it.is_scatter());
+        REQUIRE(it.direction_pdf > 0.0f);
+        const double v = 1.0 / double(it.direction_pdf);
+        acc += v;
+        acc2 += v * v;
+        ++n;
+    }
+    const double mean = acc / n, se = std::sqrt((acc2 / n - mean * mean) / n);
+    CHECK(mean == Approx(4 * pi_v<double>).margin(4 * se));
+}
