@@ -225,6 +225,21 @@ TEST_CASE("Lorenz-Mie: Qext -> 2 for large x, energy, integral forms", "[optics]
     }
 }
 
+TEST_CASE("Lorenz-Mie is stable at x = 1e5", "[optics][mie]") {
+    // Lossless m = 1.5: energy exact, Qext -> 2 from above, g continues Wiscombe's x = 5000 value
+    // (0.829592), and the glory backscatter Qback ~ 471 (../shared/reference/pitfalls.md, Lorenz-Mie).
+    const auto q = LorenzMie(C(1.5, 0), 1e5).efficiencies();
+    CHECK(q.qext > 2.0);
+    CHECK(q.qext < 2.003);
+    CHECK(q.qsca == Approx(q.qext).epsilon(1e-9));
+    CHECK(q.g == Approx(0.8296).margin(0.002));
+    CHECK(q.qback == Approx(471).epsilon(0.01));
+    // Absorbing: Qabs continues Wiscombe's x = 5000 value (0.907582) toward the ray-optics limit.
+    const auto qa = LorenzMie(C(1.5, 0.1), 1e5).efficiencies();
+    CHECK(qa.qabs == Approx(0.9062).margin(0.002));
+    CHECK(qa.qext == Approx(2.0).margin(0.002));
+}
+
 TEST_CASE("Lorenz-Mie: amplitudes_pair and the angle-span overload agree with single evaluation", "[optics][mie]") {
     const LorenzMie mie(C(1.33, 0.001), 50);
     for (double mu : {0.9, 0.3, 0.0, 1.0}) {
