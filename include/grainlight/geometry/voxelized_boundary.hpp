@@ -13,6 +13,9 @@
 /// Shapes (the BoundaryShape concept): anything with
 ///   - `inside(Vec3d p) -> bool`: p strictly inside (shape frame);
 ///   - `bounds() -> Aabb<double>`: a box containing the shape;
+///   - optional `clip(o, d, margin, t0, t1) -> bool`: narrow a ray interval to (a superset of)
+///     the part within distance `margin` of the shape (the aggregate clips rays to the shape
+///     dilated by the grain radius before Algorithm 1: spheres centred inside cannot lie beyond);
 ///   - `classify_box(lo, hi) -> VoxelClass`: conservative class of the closed box [lo, hi]
 ///     (`partial` whenever unsure), or alternatively `classify_grid(origin, side, dims, out)`
 ///     that classifies a whole grid at once (the triangle mesh does this by rasterizing its
@@ -37,6 +40,7 @@
 #include "grainlight/core/vector.hpp"
 #include "grainlight/geometry/aabb.hpp"
 #include "grainlight/geometry/bvh.hpp"
+#include "grainlight/geometry/sphere.hpp"
 #include "grainlight/geometry/triangle_mesh.hpp"
 
 namespace grainlight {
@@ -55,6 +59,25 @@ concept BoundaryShape = requires(const B& b, const Vec3d& p) {
     { b.bounds() } -> std::convertible_to<Aabb<double>>;
 };
 
+namespace detail {
+/// Slab clip of the ray o + t d to the box [lo, hi]: narrows [t0, t1]; false if empty.
+[[nodiscard]] inline bool clip_ray_to_box(const Vec3d& o, const Vec3d& d, const Vec3d& lo, const Vec3d& hi, double& t0,
+                                          double& t1) noexcept {
+    for (int a = 0; a < 3; ++a) {
+        if (d[a] == 0.0) {
+            if (o[a] < lo[a] || o[a] > hi[a]) return false;
+            continue;
+        }
+        double ta = (lo[a] - o[a]) / d[a], tb = (hi[a] - o[a]) / d[a];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+    }
+    return t0 < t1;
+}
+
+}  // namespace detail
+
 /// Solid sphere |p - center| < radius (radius > 0).
 struct SphereBoundary {
     Vec3d center{0.0};
@@ -66,6 +89,15 @@ struct SphereBoundary {
     }
     [[nodiscard]] bool inside(const Vec3d& p) const noexcept { return glm::dot(p - center, p - center) < radius * radius; }
     [[nodiscard]] Aabb<double> bounds() const noexcept { return {center - Vec3d(radius), center + Vec3d(radius)}; }
+    /// Clip the ray o + t d (unit d) to the shape dilated by `margin`: narrows [t0, t1] to the
+    /// part within distance `margin` of the shape; false if nothing remains.
+    [[nodiscard]] bool clip(const Vec3d& o, const Vec3d& d, double margin, double& t0, double& t1) const noexcept {
+        const auto r = intersect_sphere(o, d, center, radius + margin);
+        if (!r) return false;
+        t0 = std::max(t0, r.t_near);
+        t1 = std::min(t1, r.t_far);
+        return t0 < t1;
+    }
     /// Exact: outside iff the nearest box point is not inside, inside iff the farthest corner is.
     [[nodiscard]] VoxelClass classify_box(const Vec3d& lo, const Vec3d& hi) const noexcept {
         double dmin = 0, dmax = 0;
@@ -95,6 +127,10 @@ struct BoxBoundary {
         return p.x > lo.x && p.x < hi.x && p.y > lo.y && p.y < hi.y && p.z > lo.z && p.z < hi.z;
     }
     [[nodiscard]] Aabb<double> bounds() const noexcept { return {lo, hi}; }
+    /// Clip to the box grown by `margin` (a superset of the dilated box).
+    [[nodiscard]] bool clip(const Vec3d& o, const Vec3d& d, double margin, double& t0, double& t1) const noexcept {
+        return detail::clip_ray_to_box(o, d, lo - Vec3d(margin), hi + Vec3d(margin), t0, t1);
+    }
     [[nodiscard]] VoxelClass classify_box(const Vec3d& blo, const Vec3d& bhi) const noexcept {
         bool contained = true;
         for (int a = 0; a < 3; ++a) {
@@ -115,6 +151,15 @@ struct UnionBoundary {
         Aabb<double> r = a.bounds();
         r.expand(b.bounds());
         return r;
+    }
+    /// Clip to the hull of the two parts' clipped intervals.
+    [[nodiscard]] bool clip(const Vec3d& o, const Vec3d& d, double margin, double& t0, double& t1) const noexcept {
+        double a0 = t0, a1 = t1, b0 = t0, b1 = t1;
+        const bool ha = a.clip(o, d, margin, a0, a1), hb = b.clip(o, d, margin, b0, b1);
+        if (!ha && !hb) return false;
+        t0 = std::max(t0, std::min(ha ? a0 : b0, hb ? b0 : a0));
+        t1 = std::min(t1, std::max(ha ? a1 : b1, hb ? b1 : a1));
+        return t0 < t1;
     }
     [[nodiscard]] VoxelClass classify_box(const Vec3d& lo, const Vec3d& hi) const noexcept {
         const VoxelClass ca = a.classify_box(lo, hi), cb = b.classify_box(lo, hi);
@@ -181,6 +226,10 @@ public:
     }
 
     [[nodiscard]] Aabb<double> bounds() const noexcept { return bounds_; }
+    /// Clip to the mesh bounds grown by `margin` (conservative).
+    [[nodiscard]] bool clip(const Vec3d& o, const Vec3d& d, double margin, double& t0, double& t1) const noexcept {
+        return detail::clip_ray_to_box(o, d, bounds_.lo - Vec3d(margin), bounds_.hi + Vec3d(margin), t0, t1);
+    }
     [[nodiscard]] std::size_t triangle_count() const noexcept { return tris_.size(); }
     /// Bytes held (triangles copy + BVH estimate).
     [[nodiscard]] std::size_t memory_bytes() const noexcept {

@@ -283,6 +283,13 @@ public:
             t_hit = std::max(tl * R, t0);
             return true;
         };
+        // Clip to the boundary dilated by the grain radius (a grain's sphere lies within R of the
+        // shape): rays skip the spheres in front of the aggregate without testing them.
+        if constexpr (requires(double a, double b) { boundary().shape().clip(olocal, d, 1.0, a, b); }) {
+            const Vec3d o_shape = boundary().to_shape_frame(otile, olocal);
+            const double R = tile().radius();
+            if (!boundary().shape().clip(o_shape, d, R * (1 + 1e-9) + 1e-12, t_min, t_max)) return best;
+        }
         TiledTraversalStats stats;
         const TiledHit h = packing_.intersect(otile, olocal, d, t_min, t_max, grain, counters ? &stats : nullptr);
         if (counters) {
