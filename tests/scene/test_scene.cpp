@@ -96,6 +96,40 @@ TEST_CASE("Triangle-mesh shape through the BVH agrees with the analytic box", "[
     CHECK(hits > 500);
 }
 
+TEST_CASE("Mesh instances under a similarity transform match the transformed mesh", "[scene][mesh][instance]") {
+    const auto base = MeshShape<double>::from_obj(write_cube_obj(1.0).string());
+    Transform<double> xf;
+    xf.rotation = uniform_random_rotation(Vec3d(0.3, 0.7, 0.1));
+    xf.scale = 0.4;
+    xf.translation = Vec3d(0.2, -0.1, 0.3);
+    const InstanceShape<double> inst(base, xf);
+    // Reference: the same cube with its vertices moved to world space, with its own BVH.
+    TriangleMesh<double> moved = load_obj<double>(write_cube_obj(1.0).string());
+    for (auto& v : moved.vertices) v = xf.point_to_world(v);
+    const MeshShape<double> ref(moved);
+    CHECK(inst.area() == Approx(ref.area()));
+    Rng rng = Rng::from_key(6);
+    int hits = 0;
+    for (int i = 0; i < 2000; ++i) {
+        const Vec3d o = 3.0 * sample_uniform_sphere(rng.uniform2<double>());
+        const Vec3d target = xf.translation + 0.5 * sample_uniform_sphere(rng.uniform2<double>());
+        const Rayd r(o, glm::normalize(target - o));
+        double t1 = 0, t2 = 0;
+        Vec3d n1(0.0), n2(0.0);
+        const bool b1 = inst.intersect(r, t1, n1), b2 = ref.intersect(r, t2, n2);
+        REQUIRE(b1 == b2);
+        if (b1) {
+            ++hits;
+            REQUIRE(t1 == Approx(t2).margin(1e-9));
+            REQUIRE(glm::dot(n1, n2) == Approx(1.0).margin(1e-9));
+        }
+    }
+    CHECK(hits > 500);
+    Transform<double> bad;
+    bad.scale = 0.0;
+    CHECK_THROWS_AS(InstanceShape<double>(base, bad), grainlight::invalid_argument);
+}
+
 TEST_CASE("Unreadable or malformed mesh files give a clear exception", "[scene][mesh][errors]") {
     const std::string missing = "/nonexistent/dir/grain.obj";
     try {

@@ -65,7 +65,7 @@ public:
     using Spectrum = typename MediumT::Spectrum;
     using F = Float;
     using S = Spectrum;
-    using Shape = std::variant<SphereShape<F>, BoxShape<F>, QuadShape<F>, MeshShape<F>>;
+    using Shape = std::variant<SphereShape<F>, BoxShape<F>, QuadShape<F>, MeshShape<F>, InstanceShape<F>>;
     using LightT = Light<F, S>;
     using MaterialT = Material<F, S>;
 

@@ -1,6 +1,7 @@
 /// @file grainlight/scene/shapes.hpp
-/// Shapes of the small scene layer: sphere, axis-aligned box, quad (parallelogram) and triangle
-/// mesh (through the SAH BVH of geometry/bvh.hpp). Each shape answers
+/// Shapes of the small scene layer: sphere, axis-aligned box, quad (parallelogram), triangle
+/// mesh (through the SAH BVH of geometry/bvh.hpp) and instances of a mesh placed by a similarity
+/// transform (geometry/transform.hpp; the BVH is shared). Each shape answers
 /// `intersect(ray, t, n)`: the closest hit with t in (0, ray.t_max) and the unit geometric normal
 /// pointing to the shape's *outside* (outward for closed shapes; for a quad, cross(edge_u,
 /// edge_v) / |..|). Queries allocate nothing and throw nothing; constructors validate.
@@ -17,6 +18,7 @@
 #include "grainlight/core/vector.hpp"
 #include "grainlight/geometry/bvh.hpp"
 #include "grainlight/geometry/sphere.hpp"
+#include "grainlight/geometry/transform.hpp"
 #include "grainlight/geometry/triangle_mesh.hpp"
 
 namespace grainlight {
@@ -159,6 +161,32 @@ struct MeshShape {
         return true;
     }
     [[nodiscard]] F area() const noexcept { return F(area_); }
+};
+
+/// An instance of a mesh placed by a similarity transform x_world = translation + scale R x_local
+/// (geometry/transform.hpp). Copies share the mesh's BVH, so thousands of instanced grains cost
+/// one BVH. Rays are moved into the mesh's frame; t and normals come back in world units.
+template <std::floating_point F>
+struct InstanceShape {
+    MeshShape<F> mesh;
+    Transform<F> xf;
+
+    InstanceShape() = default;
+    /// Throws invalid_argument if the mesh has no BVH or the scale is not in (0, inf).
+    InstanceShape(MeshShape<F> m, const Transform<F>& t) : mesh(std::move(m)), xf(t) {
+        check_argument(mesh.bvh != nullptr, "InstanceShape", "mesh", "empty", "a built MeshShape");
+        check_argument(std::isfinite(t.scale) && t.scale > F(0), "InstanceShape", "scale", t.scale, "(0, inf)");
+    }
+    [[nodiscard]] bool intersect(const Ray<F>& r, F& t, Vec3<F>& n) const noexcept {
+        const Ray<F> local(xf.point_to_local(r.o), xf.vector_to_local(r.d), r.t_max / xf.scale);
+        F tl;
+        Vec3<F> nl;
+        if (!mesh.intersect(local, tl, nl)) return false;
+        t = tl * xf.scale;
+        n = glm::normalize(xf.vector_to_world(nl));
+        return true;
+    }
+    [[nodiscard]] F area() const noexcept { return mesh.area() * xf.scale * xf.scale; }
 };
 
 }  // namespace grainlight
