@@ -21,7 +21,12 @@
 ///     in the current medium (path-length tallies).
 ///
 /// Every callback is optional (detected with `requires`); the callback object is passed by
-/// reference and may carry any tallies. Callbacks may modify `state.throughput`.
+/// reference and may carry any tallies. Callbacks may modify `state.throughput` and
+/// `state.ray.cone`.
+///
+/// Ray footprints: the kernel carries the ray cone through the walk (width grows by t * spread
+/// along every segment; the spread angle is kept at events). Integrators that need a wider cone
+/// after diffuse or volume scattering set it in `on_scatter` / `on_surface`.
 ///
 /// Transport mode: camera paths carry importance and gather radiance (`TransportMode::radiance`):
 /// refraction into a medium of relative index eta scales the throughput by 1/eta^2 (radiance
