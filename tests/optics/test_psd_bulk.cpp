@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "common/chi2.hpp"
+#include "grainlight/media/continuous.hpp"
 #include "grainlight/optics/bulk.hpp"
 #include "grainlight/optics/particle.hpp"
 #include "grainlight/optics/psd.hpp"
@@ -195,4 +196,10 @@ TEST_CASE("Bulk properties: adaptive quadrature vs brute force, phase normalized
     const auto phase = s.make_phase<double, Spectrum<8, double>>();
     CHECK(phase.mean_cosine()[0] == Approx(s.channels[0].g).epsilon(1e-3));
     CHECK_THROWS_AS((s.make_phase<double, Spectrum<3, double>>()), invalid_argument);
+    // The bulk table drives a continuous medium (Guo21 Sec. 5.5: global properties for sampling).
+    using S8 = Spectrum<8, double>;
+    const ContinuousMedium<MiePhase<double, S8>> medium(s.sigma_t_spectrum<S8>(), s.albedo_spectrum<S8>(), phase);
+    (void)medium;
+    CHECK(s.albedo_spectrum<S8>()[0] == Approx(1.0).margin(1e-9));
+    CHECK(s.sigma_t_spectrum<S8>()[3] == Approx(s.channels[3].sigma_t));
 }

@@ -74,6 +74,25 @@ struct BulkOptics {
             for (std::size_t c = 0; c < S::size; ++c) v[i][c] = F(channels[c].phase[i]);
         return MiePhase<F, S>::from_intensities(theta, v);
     }
+    /// sigma_t per channel [1/m] (S::size == channels.size()), e.g. for ContinuousMedium.
+    template <class S>
+    [[nodiscard]] S sigma_t_spectrum() const {
+        check_argument(S::size == channels.size(), "BulkOptics::sigma_t_spectrum", "Spectrum::size", S::size,
+                       "number of wavelengths = " + std::to_string(channels.size()));
+        S s;
+        for (std::size_t c = 0; c < S::size; ++c) s[c] = typename S::value_type(channels[c].sigma_t);
+        return s;
+    }
+    /// Single-scattering albedo sigma_s / sigma_t per channel.
+    template <class S>
+    [[nodiscard]] S albedo_spectrum() const {
+        check_argument(S::size == channels.size(), "BulkOptics::albedo_spectrum", "Spectrum::size", S::size,
+                       "number of wavelengths = " + std::to_string(channels.size()));
+        S s;
+        for (std::size_t c = 0; c < S::size; ++c)
+            s[c] = typename S::value_type(channels[c].mean_C_t > 0 ? channels[c].mean_C_s / channels[c].mean_C_t : 0.0);
+        return s;
+    }
 };
 
 namespace detail {
