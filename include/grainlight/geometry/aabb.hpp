@@ -16,23 +16,31 @@ namespace grainlight {
 /// `expand` of an empty box by a point gives that point.
 template <std::floating_point F>
 struct Aabb {
+    /// Lower corner (+inf when empty).
     Vec3<F> lo{std::numeric_limits<F>::infinity()};
+    /// Upper corner (-inf when empty).
     Vec3<F> hi{-std::numeric_limits<F>::infinity()};
 
+    /// The empty box.
     Aabb() = default;
+    /// The box [lo_, hi_] (not checked).
     Aabb(const Vec3<F>& lo_, const Vec3<F>& hi_) noexcept : lo(lo_), hi(hi_) {}
 
     /// True if no point was ever added.
     [[nodiscard]] bool empty() const noexcept { return lo.x > hi.x || lo.y > hi.y || lo.z > hi.z; }
+    /// Grow to contain the point p.
     void expand(const Vec3<F>& p) noexcept {
         lo = glm::min(lo, p);
         hi = glm::max(hi, p);
     }
+    /// Grow to contain the box b.
     void expand(const Aabb& b) noexcept {
         lo = glm::min(lo, b.lo);
         hi = glm::max(hi, b.hi);
     }
+    /// hi - lo (0 for an empty box).
     [[nodiscard]] Vec3<F> extent() const noexcept { return empty() ? Vec3<F>(F(0)) : hi - lo; }
+    /// Centre (lo + hi) / 2.
     [[nodiscard]] Vec3<F> center() const noexcept { return (lo + hi) * F(0.5); }
     /// Surface area (0 for an empty box); the SAH cost metric.
     [[nodiscard]] F surface_area() const noexcept {
@@ -44,6 +52,7 @@ struct Aabb {
         const Vec3<F> e = extent();
         return (e.x >= e.y && e.x >= e.z) ? 0 : (e.y >= e.z ? 1 : 2);
     }
+    /// True if p lies in the closed box.
     [[nodiscard]] bool contains(const Vec3<F>& p) const noexcept {
         return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
     }

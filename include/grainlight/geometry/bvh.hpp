@@ -28,22 +28,33 @@ namespace grainlight {
 /// original mesh orientation, not flipped toward the ray.
 template <std::floating_point F>
 struct TriangleHit {
+    /// Ray parameter of the hit (+inf if none).
     F t = std::numeric_limits<F>::infinity();
+    /// Index of the triangle in the original mesh (max if none).
     std::uint32_t prim = std::numeric_limits<std::uint32_t>::max();
+    /// Barycentric weight of corner 1.
     F b1 = F(0);
+    /// Barycentric weight of corner 2.
     F b2 = F(0);
+    /// Unit geometric normal (mesh orientation).
     Vec3<F> n_geom{F(0), F(0), F(1)};
+    /// True if something was hit.
     [[nodiscard]] bool valid() const noexcept { return prim != std::numeric_limits<std::uint32_t>::max(); }
+    /// Same as valid().
     explicit operator bool() const noexcept { return valid(); }
 };
 
 /// Per-ray constants of the watertight test (shear into the ray's coordinate system).
 template <std::floating_point F>
 struct WatertightRay {
+    /// Ray origin.
     Vec3<F> o;
+    /// Axis permutation: kz is the dominant axis of the direction.
     int kx = 0, ky = 1, kz = 2;
+    /// Shear constants.
     F sx = F(0), sy = F(0), sz = F(1);
 
+    /// Precompute for a ray o + t d (d non-zero).
     WatertightRay(const Vec3<F>& origin, const Vec3<F>& d) noexcept : o(origin) {
         const Vec3<F> a = glm::abs(d);
         kz = (a.x > a.y) ? (a.x > a.z ? 0 : 2) : (a.y > a.z ? 1 : 2);
@@ -98,10 +109,15 @@ template <std::floating_point F>
 /// reordered triangle array.
 template <std::floating_point F>
 struct BvhNode {
+    /// Bounds of the node's triangles.
     Aabb<F> box;
+    /// Right child (interior) or first triangle (leaf).
     std::uint32_t offset = 0;
+    /// Triangle count (0 for interior nodes).
     std::uint16_t count = 0;
+    /// Split axis (interior nodes).
     std::uint8_t axis = 0;
+    /// Padding.
     std::uint8_t pad = 0;
 };
 
@@ -114,6 +130,7 @@ public:
     static constexpr int bin_count = 16;
     static constexpr int max_depth = 64;
 
+    /// An empty BVH (every query misses).
     Bvh() = default;
 
     /// Build over `mesh` (validated; throws grainlight::invalid_argument on bad meshes).
@@ -144,8 +161,11 @@ public:
         }
     }
 
+    /// The flattened nodes (root first).
     [[nodiscard]] const std::vector<BvhNode<F>>& nodes() const noexcept { return nodes_; }
+    /// Number of triangles.
     [[nodiscard]] std::size_t triangle_count() const noexcept { return tris_.size(); }
+    /// Bounds of the whole mesh.
     [[nodiscard]] Aabb<F> bounds() const noexcept { return nodes_.empty() ? Aabb<F>() : nodes_[0].box; }
 
     /// Closest hit with t in (t_min, t_max) along o + t d (d need not be normalized; t is in
@@ -155,6 +175,7 @@ public:
         traverse<false>(o, d, t_min, t_max, hit);
         return hit;
     }
+    /// Closest hit along a Ray in (t_min, ray.t_max).
     [[nodiscard]] TriangleHit<F> intersect(const Ray<F>& ray, F t_min = F(0)) const noexcept {
         return intersect(ray.o, ray.d, t_min, ray.t_max);
     }

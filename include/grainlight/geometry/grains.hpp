@@ -212,6 +212,7 @@ enum class GrainMaterialKind {
     diffuse                 ///< opaque Lambertian surface (flour)
 };
 
+/// Name of a material kind ("dielectric", "absorbing-dielectric", "diffuse").
 [[nodiscard]] inline std::string_view to_string(GrainMaterialKind k) noexcept {
     switch (k) {
         case GrainMaterialKind::dielectric: return "dielectric";
@@ -225,6 +226,7 @@ enum class GrainMaterialKind {
 /// of the *bounding-sphere* radius (the scatterometer's unit), so sigma_a = 1 means one mean free
 /// path per bounding-sphere radius.
 struct GrainMaterial {
+    /// Which model applies.
     GrainMaterialKind kind = GrainMaterialKind::dielectric;
     double ior = 1.5;                          ///< relative index of refraction (> 0, != 1 allowed)
     RGBd interior_sigma_a{0.0, 0.0, 0.0};      ///< absorption coefficient inside (absorbing_dielectric)
@@ -232,6 +234,7 @@ struct GrainMaterial {
     double interior_g = 0.0;                   ///< HG asymmetry of the interior phase function (0 = isotropic)
     RGBd albedo{0.8, 0.8, 0.8};                ///< Lambertian albedo (diffuse)
 
+    /// Smooth lossless dielectric of relative index `ior` (validated).
     [[nodiscard]] static GrainMaterial make_dielectric(double ior) {
         GrainMaterial m;
         m.kind = GrainMaterialKind::dielectric;
@@ -239,6 +242,7 @@ struct GrainMaterial {
         m.validate();
         return m;
     }
+    /// Dielectric enclosing a medium (sigma per bounding radius, HG g), validated.
     [[nodiscard]] static GrainMaterial make_absorbing_dielectric(double ior, RGBd sigma_a, RGBd sigma_s = RGBd(0.0),
                                                                  double g = 0.0) {
         GrainMaterial m;
@@ -250,6 +254,7 @@ struct GrainMaterial {
         m.validate();
         return m;
     }
+    /// Lambertian grain with per-channel albedo in [0, 1] (validated).
     [[nodiscard]] static GrainMaterial make_diffuse(RGBd albedo) {
         GrainMaterial m;
         m.kind = GrainMaterialKind::diffuse;

@@ -16,9 +16,13 @@ namespace grainlight {
 /// either may be negative (origin inside: t_near < 0 < t_far; sphere behind: both < 0).
 template <std::floating_point F>
 struct SphereRoots {
+    /// True if the line meets the sphere.
     bool hit = false;
+    /// Smaller root.
     F t_near = F(0);
+    /// Larger root.
     F t_far = F(0);
+    /// Same as `hit`.
     explicit operator bool() const noexcept { return hit; }
 };
 

@@ -16,13 +16,18 @@ namespace grainlight {
 /// to_world(v) = v.x r0 + v.y r1 + v.z r2 (the transpose).
 template <std::floating_point F>
 struct Rotation {
+    /// Row 0 (the local x axis in world coordinates).
     Vec3<F> r0{F(1), F(0), F(0)};
+    /// Row 1 (local y).
     Vec3<F> r1{F(0), F(1), F(0)};
+    /// Row 2 (local z).
     Vec3<F> r2{F(0), F(0), F(1)};
 
+    /// World -> local: R^T v.
     [[nodiscard]] GRAINLIGHT_HOST_DEVICE Vec3<F> to_local(const Vec3<F>& v) const noexcept {
         return Vec3<F>(glm::dot(r0, v), glm::dot(r1, v), glm::dot(r2, v));
     }
+    /// Local -> world: R v.
     [[nodiscard]] GRAINLIGHT_HOST_DEVICE Vec3<F> to_world(const Vec3<F>& v) const noexcept {
         return v.x * r0 + v.y * r1 + v.z * r2;
     }
@@ -45,18 +50,24 @@ template <std::floating_point F>
 /// Similarity transform x_world = translation + scale * R.to_world(x_local) (scale > 0).
 template <std::floating_point F>
 struct Transform {
+    /// Orientation of the instance.
     Rotation<F> rotation{};
+    /// Uniform scale (> 0).
     F scale = F(1);
+    /// Position of the local origin in world coordinates.
     Vec3<F> translation{F(0)};
 
+    /// Local point -> world point.
     [[nodiscard]] Vec3<F> point_to_world(const Vec3<F>& p) const noexcept {
         return translation + scale * rotation.to_world(p);
     }
+    /// World point -> local point.
     [[nodiscard]] Vec3<F> point_to_local(const Vec3<F>& p) const noexcept {
         return rotation.to_local(p - translation) / scale;
     }
     /// Directions (and normals: a similarity keeps them perpendicular) are only rotated.
     [[nodiscard]] Vec3<F> vector_to_world(const Vec3<F>& v) const noexcept { return rotation.to_world(v); }
+    /// World direction -> local direction.
     [[nodiscard]] Vec3<F> vector_to_local(const Vec3<F>& v) const noexcept { return rotation.to_local(v); }
 };
 

@@ -29,12 +29,15 @@ namespace grainlight {
 /// (zero-area) triangles.
 template <std::floating_point F>
 struct TriangleMesh {
+    /// Vertex positions.
     std::vector<Vec3<F>> vertices;
+    /// Vertex indices per triangle (counter-clockwise seen from outside).
     std::vector<std::array<std::uint32_t, 3>> triangles;
     /// Unit geometric normal per face (right-hand rule on the index order); fill with
     /// `compute_face_normals()`.
     std::vector<Vec3<F>> face_normals;
 
+    /// Number of triangles.
     [[nodiscard]] std::size_t triangle_count() const noexcept { return triangles.size(); }
 
     /// The three corners of triangle i.
@@ -43,6 +46,7 @@ struct TriangleMesh {
         return {vertices[t[0]], vertices[t[1]], vertices[t[2]]};
     }
 
+    /// Fill `face_normals` (degenerate triangles get +z).
     void compute_face_normals() {
         face_normals.resize(triangles.size());
         for (std::size_t i = 0; i < triangles.size(); ++i) {
@@ -53,6 +57,7 @@ struct TriangleMesh {
         }
     }
 
+    /// Bounding box of the vertices.
     [[nodiscard]] Aabb<F> bounds() const noexcept {
         Aabb<F> b;
         for (const auto& v : vertices) b.expand(v);

@@ -151,6 +151,7 @@ template <std::floating_point F = float, class S = RGB>
 template <std::floating_point F = float>
 class TeleportationMedium {
 public:
+    /// Scalar and spectrum types (Medium concept): RGB of F.
     using Float = F;
     using Spectrum = grainlight::Spectrum<3, F>;
 
@@ -195,9 +196,11 @@ public:
         mu_edges_ = ScatterometerGrid::mu_edges(grid_.tt_mu_bins);
     }
 
+    /// The effective RTE parameters for the same f and R (Eqs. 1-4).
     [[nodiscard]] const EffectiveRteParams& params() const noexcept { return params_; }
     /// Eq. 1 rate of bounding-sphere encounters.
     [[nodiscard]] double sigma_b() const noexcept { return sigma_b_; }
+    /// Hit probability.
     [[nodiscard]] double beta() const noexcept { return beta_; }
     /// Channel-mean probability that a hitting path is not absorbed.
     [[nodiscard]] double survival_probability() const noexcept { return survive_; }
@@ -268,6 +271,7 @@ public:
         }
     }
 
+    /// Short description for logs and test failures.
     [[nodiscard]] std::string to_string() const {
         return "TeleportationMedium[sigma_b = " + std::to_string(sigma_b_) + ", beta = " + std::to_string(beta_) +
                ", alpha_s(mean) = " + std::to_string(survive_) + "]";

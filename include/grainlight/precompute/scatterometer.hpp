@@ -75,11 +75,14 @@ struct ScatterometerGrid {
     std::uint32_t tt_across_bins = 16;  ///< TT table: bins of |(x_o - x_i) x w_i| on [0, 2]
     std::uint32_t chord_bins = 64;      ///< pass-through chord histogram on [0, 2]
 
+    /// Fixed table ranges (unit bounding sphere).
     static constexpr double along_min = -2.0, along_max = 2.0, across_max = 2.0, chord_max = 2.0;
 
+    /// Number of cells of the TT table.
     [[nodiscard]] std::size_t tt_cells() const noexcept {
         return std::size_t(tt_mu_bins) * tt_along_bins * tt_across_bins;
     }
+    /// Same resolution.
     friend bool operator==(const ScatterometerGrid&, const ScatterometerGrid&) = default;
 
     /// Throws grainlight::invalid_argument for zero or absurd bin counts.
@@ -105,6 +108,7 @@ struct ScatterometerGrid {
         const auto k = std::uint32_t(std::min(double(n) - 1.0, std::floor(theta / pi_v<double> * double(n))));
         return n - 1 - k;
     }
+    /// The n + 1 bin edges of mu_bin, increasing from -1 to 1.
     [[nodiscard]] static std::vector<double> mu_edges(std::uint32_t n) {
         std::vector<double> e(n + 1);
         for (std::uint32_t k = 0; k <= n; ++k) e[k] = std::cos(pi_v<double> * double(n - k) / double(n));
@@ -112,6 +116,7 @@ struct ScatterometerGrid {
         e.back() = 1.0;
         return e;
     }
+    /// Bin of x among n equal bins on [lo, hi] (clamped).
     [[nodiscard]] static std::uint32_t uniform_bin(double x, double lo, double hi, std::uint32_t n) noexcept {
         const double u = (x - lo) / (hi - lo) * double(n);
         return std::uint32_t(std::clamp(u, 0.0, double(n) - 1.0));
@@ -121,9 +126,12 @@ struct ScatterometerGrid {
 /// Statistics of one grain (or of a mixture) per RGB channel, as per-incident-ray expectations
 /// (see the file comment). Use the accessors for the physical quantities.
 struct GrainStats {
+    /// RGB.
     static constexpr std::size_t channels = 3;
+    /// One value per channel.
     using ChannelArray = std::array<double, channels>;
 
+    /// Table resolution.
     ScatterometerGrid grid{};
     std::uint64_t rays = 0;     ///< incident rays traced (for a mixture: the smallest component count)
     double hit = 0;             ///< P(hit) = beta
@@ -153,29 +161,38 @@ struct GrainStats {
     [[nodiscard]] double g(std::size_t c) const noexcept { return exit[c] > 0 ? cos_theta[c] / exit[c] : 0.0; }
 
     // Channel averages, as Table 1 reports them.
+    /// Channel mean of alpha_s (Table 1).
     [[nodiscard]] double alpha_s_avg() const noexcept { return avg([&](std::size_t c) { return alpha_s(c); }); }
+    /// Channel mean of lambda_s (Table 1).
     [[nodiscard]] double lambda_s_avg() const noexcept { return avg([&](std::size_t c) { return lambda_s(c); }); }
+    /// Channel mean of the signed teleport.
     [[nodiscard]] double teleport_along_avg() const noexcept { return avg([&](std::size_t c) { return teleport_along(c); }); }
+    /// Channel mean of g.
     [[nodiscard]] double g_avg() const noexcept { return avg([&](std::size_t c) { return g(c); }); }
 
     // Monte Carlo standard errors (binomial / sample-variance estimates over `rays` incident rays).
+    /// Standard error of beta.
     [[nodiscard]] double beta_stderr() const noexcept { return rays ? std::sqrt(hit * (1 - hit) / double(rays)) : 0.0; }
+    /// Standard error of lambda_delta.
     [[nodiscard]] double lambda_delta_stderr() const noexcept {
         const double n = (1.0 - hit) * double(rays);
         if (n < 2) return 0.0;
         const double m = lambda_delta(), m2 = miss_chord2 / (1.0 - hit);
         return std::sqrt(std::max(0.0, m2 - m * m) / n);
     }
+    /// Standard error of alpha_s(c).
     [[nodiscard]] double alpha_s_stderr(std::size_t c) const noexcept {
         const double n = hit * double(rays), a = alpha_s(c);
         return n > 0 ? std::sqrt(a * (1 - a) / n) : 0.0;
     }
+    /// Standard error of teleport_along(c) (and lambda_s(c)).
     [[nodiscard]] double teleport_along_stderr(std::size_t c) const noexcept {
         const double n = exit[c] * double(rays);
         if (n < 2) return 0.0;
         const double m = teleport_along(c), m2 = along2[c] / exit[c];
         return std::sqrt(std::max(0.0, m2 - m * m) / n);
     }
+    /// Standard error of g(c).
     [[nodiscard]] double g_stderr(std::size_t c) const noexcept {
         const double n = exit[c] * double(rays);
         if (n < 2) return 0.0;
@@ -292,7 +309,9 @@ public:
         return mesh(make_grain_mesh<float>(shape, float(radius), seed, level), material);
     }
 
+    /// The grain's material.
     [[nodiscard]] const GrainMaterial& material() const noexcept { return material_; }
+    /// True for the analytic sphere, false for a mesh.
     [[nodiscard]] bool is_analytic_sphere() const noexcept { return !bvh_; }
     /// Radius of the grain's own (origin-centred) bounding sphere.
     [[nodiscard]] double radius() const noexcept { return bvh_ ? mesh_radius_ : sphere_radius_; }
@@ -634,6 +653,7 @@ struct ScatterCounts {
 
 /// Container kind and version of scatterometer files.
 inline constexpr std::uint32_t grain_stats_kind = fourcc("SCAT");
+/// Payload layout version of SCAT files.
 inline constexpr std::uint32_t grain_stats_version = 1;
 
 /// Serialize to the container payload (see save_grain_stats).
