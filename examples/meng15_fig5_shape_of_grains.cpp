@@ -38,7 +38,7 @@ int main(int argc, char** argv) {
         cli.common_options("out/meng15_fig5_shape_of_grains")
             .option("grain", "cube | snow", "cube")
             .option("grain-radius", "bounding-sphere radius of the grains (scene units; the sphere has radius 0.5)", "0.004")
-            .option("spp", "samples per pixel (default: 4 quick, 64 full)")
+            .option("spp", "samples per pixel (default: 8 quick, 64 full)")
             .option("exposure", "PNG exposure in stops", "1");
         cli.finish();
         const bool full = cli.full_quality();
@@ -48,11 +48,11 @@ int main(int argc, char** argv) {
         const std::string grain = cli.str("grain", "cube");
         if (grain != "cube" && grain != "snow") throw cli_error("--grain = '" + grain + "' must be cube or snow");
         const double r_grain = cli.num("grain-radius", 0.004);
-        if (!(r_grain >= 5e-4 && r_grain <= 0.05)) throw cli_error("--grain-radius must be in [5e-4, 0.05]");
-        const std::uint64_t spp = cli.integer("spp", full ? 64 : 4);
+        if (!(r_grain >= 2e-4 && r_grain <= 0.05)) throw cli_error("--grain-radius must be in [2e-4, 0.05]");
+        const std::uint64_t spp = cli.integer("spp", full ? 64 : 8);
         if (spp < 1 || spp > 65536) throw cli_error("--spp must be in [1, 65536]");
         const double exposure = cli.num("exposure", 1.0);
-        const int width = full ? 640 : 240, height = full ? 400 : 150;
+        const int width = full ? 640 : 320, height = full ? 400 : 200;
 
         // Tile: MD packing at f = 0.6, scaled to the grain radius.
         const auto packed = gl::md_pack(full ? 1000 : 300, 0.6, seed);
