@@ -90,12 +90,13 @@ struct VptCallbacks {
     Rng& rng;
     VptOptions opt;
     S L{F(0)};
+    bool last_nee = false;  ///< whether NEE was done at the last non-specular vertex (MIS partner)
 
     /// Emission seen by the path, MIS-weighted against the NEE that was done at the last vertex.
     void add_emission(const PathState<F, S>& st, const S& Le, const SurfaceHit<F, S>& hit) noexcept {
         if (Le.is_black()) return;
         F w = F(1);
-        if (opt.nee && !st.specular) {
+        if (opt.nee && !st.specular && last_nee) {
             const F pl = scene.light_pdf(st.last_p, st.ray.d, hit);
             w = power_heuristic(st.last_pdf, pl);
         }
@@ -122,6 +123,7 @@ struct VptCallbacks {
 
     bool on_surface(PathState<F, S>& st, const SurfaceHit<F, S>& hit) noexcept {
         if (hit.light >= 0) add_emission(st, scene.emitted(hit, st.ray.d), hit);
+        if (hit.type == SurfaceType::diffuse) last_nee = opt.nee;
         if (opt.nee && hit.type == SurfaceType::diffuse) {
             const Vec3<F> nf = glm::dot(st.ray.d, hit.n) < F(0) ? hit.n : -hit.n;
             const S rho_over_pi = hit.reflectance * inv_pi_v<F>;
@@ -138,8 +140,10 @@ struct VptCallbacks {
 
     template <class M>
     bool on_scatter(PathState<F, S>& st, const Interaction<F, S>& it, const M& m) noexcept {
+        last_nee = false;  // media that choose their own direction (or custom NEE) get no MIS partner
         if constexpr (PhaseMedium<M>) {
             if (opt.nee && !it.has_direction && it.nee == NeeKind::phase) {
+                last_nee = true;
                 const Vec3<F> d = st.ray.d;
                 next_event(st, it.p, it.p, [&](const Vec3<F>& w, S& f, F& pdf) {
                     const auto pe = m.phase().eval(d, w);
