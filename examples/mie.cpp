@@ -11,6 +11,7 @@
 // S1, S2 in van de Hulst's convention (Re S(0) = x^2 Qext / 4; optics/lorenz_mie.hpp).
 #include <cmath>
 #include <complex>
+#include <optional>
 #include <cstdio>
 #include <iostream>
 #include <sstream>
@@ -49,7 +50,8 @@ int main(int argc, char** argv) {
             .option("angles", "scattering angles in degrees, comma-separated, each in [0, 180]",
                     "0,30,60,90,120,150,180")
             .option("method", "mie | goa | auto (auto: Mie below r = 2 um, GOA above; needs --radius-um)", "mie")
-            .option("p-max", "highest GOA order p", "3");
+            .option("p-max", "highest GOA order p", "3")
+            .option("out", "if given: also write DIR/mie.csv (S1, S2 at 0..180 deg, 0.5-deg steps) and DIR/mie.png");
         cli.finish();
 
         const double n = cli.num("n", 1.5), k = cli.num("k", 0.0);
@@ -117,6 +119,33 @@ int main(int argc, char** argv) {
                 s1.push_back(s.S1);
                 s2.push_back(s.S2);
             }
+        }
+        if (cli.has("out")) {
+            // Angular table and plot of log10 |S1|, |S2| (the calculator's figure).
+            const auto dir = cli.out_dir();
+            gl_examples::Csv csv({"theta_deg", "re_S1", "im_S1", "re_S2", "im_S2", "intensity"});
+            std::optional<grainlight::LorenzMie> mie;
+            std::optional<grainlight::Goa> goa;
+            if (used == "mie") mie.emplace(m, x); else goa.emplace(m, x, int(p_max));
+            for (int i = 0; i <= 360; ++i) {
+                const double th = i * pi / 360;
+                const auto s = mie ? mie->amplitudes(i == 0 ? 1.0 : i == 360 ? -1.0 : std::cos(th)) : goa->amplitudes_at_angle(th);
+                csv.row({0.5 * i, s.S1.real(), s.S1.imag(), s.S2.real(), s.S2.imag(), std::norm(s.S1) + std::norm(s.S2)});
+            }
+            const auto csv_path = dir / "mie.csv";
+            csv.write(csv_path);
+            const auto png = dir / "mie.png";
+            gl_examples::plot_with_matplotlib(
+                dir / "mie.py",
+                "d = read_csv(r'''" + csv_path.string() + "''')\n"
+                "s1 = np.hypot(d['re_S1'], d['im_S1']); s2 = np.hypot(d['re_S2'], d['im_S2'])\n"
+                "fig, ax = plt.subplots(figsize=(6, 4))\n"
+                "ax.semilogy(d['theta_deg'], s1, label='|S1|'); ax.semilogy(d['theta_deg'], s2, label='|S2|')\n"
+                "ax.set_xlabel('scattering angle [deg]'); ax.legend()\n"
+                "ax.set_title('" + used + ": m = " + cli.str("n", "1.5") + " + " + cli.str("k", "0") + " i, x = " +
+                    std::to_string(x) + "')\n"
+                "fig.tight_layout(); fig.savefig(png, dpi=110)\n",
+                png);
         }
         std::cout << "mie: m = " << n << " + " << k << " i, x = " << x << ", method " << used << "\n";
         gl_examples::Json j;
