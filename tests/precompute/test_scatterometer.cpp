@@ -352,13 +352,13 @@ TEST_CASE("hostile payloads with valid checksums are rejected without crashing",
     {
         auto p = good;  // beta = NaN
         const double nan = std::numeric_limits<double>::quiet_NaN();
-        std::memcpy(p.data() + 20 + 8, &nan, 8);
+        std::memcpy(p.data() + 24 + 8, &nan, 8);
         try_payload(p);
     }
     {
         auto p = good;  // zero rays
         const std::uint64_t zero = 0;
-        std::memcpy(p.data() + 20, &zero, 8);
+        std::memcpy(p.data() + 24, &zero, 8);
         try_payload(p);
     }
     try_payload({});

@@ -17,8 +17,8 @@
 ///     exponential flights with rate sigma_b to the next bounding sphere (Eq. 1); there the ray
 ///     passes through with probability 1 - beta (offset drawn from the recorded chord histogram),
 ///     or hits the grain: it is absorbed with probability 1 - alpha_s or teleported, with the exit
-///     direction and the exit offset (along and across the incident direction) drawn jointly
-///     from the scatterometer's 3D table.
+///     direction and the exit offset (along and across the incident direction, and their
+///     relative azimuth) drawn jointly from the scatterometer's table.
 #pragma once
 
 #include <array>
@@ -144,9 +144,8 @@ template <std::floating_point F = float, class S = RGB>
 /// per-channel ratio in `weight` (one-sample MIS; weight 1 for grey grains).
 ///
 /// Approximations of this TT implementation (documented in docs/meng15.md): within a table cell
-/// (cos theta, along, across) values are uniform; the azimuth of the exit direction around w_i
-/// and the azimuth of the perpendicular offset are drawn independently (the 3D table keeps their
-/// magnitudes, not their relative azimuth); the teleport can leave the aggregate's boundary
+/// (cos theta, along, across, relative azimuth) values are uniform; the absolute azimuth around
+/// w_i is uniform (random grain rotations); the teleport can leave the aggregate's boundary
 /// (t_max), which the integrator must handle (the exit point lies within 2R of the entry point).
 template <std::floating_point F = float>
 class TeleportationMedium {
@@ -191,7 +190,8 @@ public:
         if (survive_ > 0) {
             cells_ = DiscreteDistribution<double>(std::span<const double>(mean));
             mu_marginal_.assign(grid_.tt_mu_bins, 0.0);
-            for (std::size_t i = 0; i < n; ++i) mu_marginal_[i / (std::size_t(grid_.tt_along_bins) * grid_.tt_across_bins)] += mean[i];
+            const std::size_t per_mu = std::size_t(grid_.tt_along_bins) * grid_.tt_across_bins * grid_.tt_dphi_bins;
+            for (std::size_t i = 0; i < n; ++i) mu_marginal_[i / per_mu] += mean[i];
         }
         mu_edges_ = ScatterometerGrid::mu_edges(grid_.tt_mu_bins);
     }
@@ -230,14 +230,17 @@ public:
         }
         double pmf = 0, u_rem = 0;
         const std::size_t cell = cells_.sample(rng.uniform<double>(), &pmf, &u_rem);
-        const std::size_t n_ac = grid_.tt_across_bins, n_al = grid_.tt_along_bins;
-        const std::size_t i_mu = cell / (n_al * n_ac), i_al = (cell / n_ac) % n_al, i_ac = cell % n_ac;
+        const std::size_t n_ac = grid_.tt_across_bins, n_al = grid_.tt_along_bins, n_dp = grid_.tt_dphi_bins;
+        const std::size_t i_dp = cell % n_dp, c3 = cell / n_dp;
+        const std::size_t i_mu = c3 / (n_al * n_ac), i_al = (c3 / n_ac) % n_al, i_ac = c3 % n_ac;
         const double mu = mu_edges_[i_mu] + rng.uniform<double>() * (mu_edges_[i_mu + 1] - mu_edges_[i_mu]);
         const double al_w = (ScatterometerGrid::along_max - ScatterometerGrid::along_min) / double(n_al);
         const double along = ScatterometerGrid::along_min + (double(i_al) + rng.uniform<double>()) * al_w;
         const double across = (double(i_ac) + rng.uniform<double>()) * ScatterometerGrid::across_max / double(n_ac);
         const double phi_offset = 2.0 * pi_v<double> * rng.uniform<double>();
-        const double phi_dir = 2.0 * pi_v<double> * rng.uniform<double>();
+        const double dphi = ScatterometerGrid::dphi_center(std::uint32_t(i_dp), std::uint32_t(n_dp)) +
+                            (rng.uniform<double>() - 0.5) * 2.0 * pi_v<double> / double(n_dp);
+        const double phi_dir = phi_offset + dphi;
         const Vec3d d(ray.d);
         const Frame<double> frame(d);
         const Vec3d offset = along * d + across * (std::cos(phi_offset) * frame.s + std::sin(phi_offset) * frame.t);

@@ -16,8 +16,11 @@
 ///    `teleport_along` = E[(x_o - x_i) . w_i] (negative for grains that mostly back-scatter);
 ///  - Phi(cos theta): histogram of cos theta = <w_i, w_o> over exiting rays (non-uniform grid,
 ///    uniform in theta, so both peaks are resolved), per channel;
-///  - the joint table of (cos theta, offset along w_i, offset across w_i) of exiting rays and the
-///    pass-through chord histogram, from which media/teleportation.hpp samples TT steps.
+///  - the joint table of (cos theta, offset along w_i, offset across w_i, relative azimuth) of
+///    exiting rays and the pass-through chord histogram, from which media/teleportation.hpp
+///    samples TT steps. The relative azimuth is the angle around w_i from the perpendicular part
+///    of the offset x_o - x_i to the perpendicular part of w_o (0 or pi for a sphere, whose
+///    paths stay in one plane); it keeps the correlation between where and where-to a path exits.
 ///
 /// Everything is per RGB channel (a grey material traces each path once for all channels; a
 /// coloured one traces each hitting ray once per channel with its own random stream). All
@@ -32,7 +35,7 @@
 /// results on any thread count. OpenMP pragmas compile away without OpenMP.
 ///
 /// Files: `save_grain_stats` / `load_grain_stats` use the shared container of
-/// precompute/serialization.hpp (kind "SCAT", version 1): versioned, checksummed, atomic write;
+/// precompute/serialization.hpp (kind "SCAT", version 2): versioned, checksummed, atomic write;
 /// the loader throws grainlight::format_error on truncated, corrupted or inconsistent files.
 #pragma once
 
@@ -73,6 +76,7 @@ struct ScatterometerGrid {
     std::uint32_t tt_mu_bins = 24;      ///< TT table: bins in cos theta (uniform in theta)
     std::uint32_t tt_along_bins = 32;   ///< TT table: bins of (x_o - x_i) . w_i on [-2, 2]
     std::uint32_t tt_across_bins = 16;  ///< TT table: bins of |(x_o - x_i) x w_i| on [0, 2]
+    std::uint32_t tt_dphi_bins = 8;     ///< TT table: bins of the relative azimuth on [-pi, pi) (see GrainStats)
     std::uint32_t chord_bins = 64;      ///< pass-through chord histogram on [0, 2]
 
     /// Fixed table ranges (unit bounding sphere).
@@ -80,7 +84,7 @@ struct ScatterometerGrid {
 
     /// Number of cells of the TT table.
     [[nodiscard]] std::size_t tt_cells() const noexcept {
-        return std::size_t(tt_mu_bins) * tt_along_bins * tt_across_bins;
+        return std::size_t(tt_mu_bins) * tt_along_bins * tt_across_bins * tt_dphi_bins;
     }
     /// Same resolution.
     friend bool operator==(const ScatterometerGrid&, const ScatterometerGrid&) = default;
@@ -92,13 +96,15 @@ struct ScatterometerGrid {
         check_argument(tt_mu_bins >= 1 && tt_mu_bins <= 1024, w, "tt_mu_bins", tt_mu_bins, "[1, 1024]");
         check_argument(tt_along_bins >= 1 && tt_along_bins <= 1024, w, "tt_along_bins", tt_along_bins, "[1, 1024]");
         check_argument(tt_across_bins >= 1 && tt_across_bins <= 1024, w, "tt_across_bins", tt_across_bins, "[1, 1024]");
+        check_argument(tt_dphi_bins >= 1 && tt_dphi_bins <= 64, w, "tt_dphi_bins", tt_dphi_bins, "[1, 64]");
         check_argument(tt_cells() <= (std::size_t(1) << 24), w, "tt cells", tt_cells(), "<= 2^24");
         check_argument(chord_bins >= 1 && chord_bins <= 100000, w, "chord_bins", chord_bins, "[1, 100000]");
     }
     /// Non-throwing form of validate() for loaders: true if every bin count is in range.
     [[nodiscard]] bool valid() const noexcept {
         return phase_bins >= 2 && phase_bins <= 100000 && tt_mu_bins >= 1 && tt_mu_bins <= 1024 && tt_along_bins >= 1 &&
-               tt_along_bins <= 1024 && tt_across_bins >= 1 && tt_across_bins <= 1024 &&
+               tt_along_bins <= 1024 && tt_across_bins >= 1 && tt_across_bins <= 1024 && tt_dphi_bins >= 1 &&
+               tt_dphi_bins <= 64 &&
                tt_cells() <= (std::size_t(1) << 24) && chord_bins >= 1 && chord_bins <= 100000;
     }
     /// Bin of cos theta on a grid uniform in theta with n bins, ordered by increasing cos theta
@@ -109,6 +115,17 @@ struct ScatterometerGrid {
         return n - 1 - k;
     }
     /// The n + 1 bin edges of mu_bin, increasing from -1 to 1.
+    /// Bin of a relative azimuth dphi in [-pi, pi] among n bins *centred* on -pi + 2 pi k / n
+    /// (wrapping around), so that dphi = 0 and pi (planar paths) fall in bin centres for even n.
+    [[nodiscard]] static std::uint32_t dphi_bin(double dphi, std::uint32_t n) noexcept {
+        const double u = (dphi + pi_v<double>) / (2.0 * pi_v<double>) * double(n) + 0.5;
+        const auto k = static_cast<std::int64_t>(std::floor(u));
+        return std::uint32_t(((k % std::int64_t(n)) + std::int64_t(n)) % std::int64_t(n));
+    }
+    /// Centre of dphi bin k: -pi + 2 pi k / n.
+    [[nodiscard]] static double dphi_center(std::uint32_t k, std::uint32_t n) noexcept {
+        return -pi_v<double> + 2.0 * pi_v<double> * double(k) / double(n);
+    }
     [[nodiscard]] static std::vector<double> mu_edges(std::uint32_t n) {
         std::vector<double> e(n + 1);
         for (std::uint32_t k = 0; k <= n; ++k) e[k] = std::cos(pi_v<double> * double(n - k) / double(n));
@@ -145,7 +162,7 @@ struct GrainStats {
     ChannelArray terminated{};  ///< P(path cut at the bounce limit or leaked through the mesh) (diagnostic; counted as absorbed)
     std::vector<double> chord_hist;                  ///< P(miss and chord bin)
     std::array<std::vector<double>, channels> phase_hist;  ///< P(exit and cos theta bin), per channel
-    std::array<std::vector<double>, channels> tt_table;    ///< P(exit and (mu, along, across) cell), per channel
+    std::array<std::vector<double>, channels> tt_table;    ///< P(exit and (mu, along, across, dphi) cell), per channel; index ((mu * along_bins + along) * across_bins + across) * dphi_bins + dphi
 
     /// Hit probability beta (Meng15 Sec. 4.2.2).
     [[nodiscard]] double beta() const noexcept { return hit; }
@@ -531,8 +548,17 @@ struct ScatterCounts {
                         ++local.exits[k];
                         const Vec3d off = path.x_o - x_i;
                         const double a = glm::dot(off, wi);
-                        const double across = glm::length(off - a * wi);
+                        const Vec3d perp = off - a * wi;
+                        const double across = glm::length(perp);
                         const double mu = std::clamp(glm::dot(wi, path.w_o), -1.0, 1.0);
+                        // Azimuth of the exit direction around w_i relative to the offset's
+                        // perpendicular part (0 when either is undefined).
+                        const Vec3d w_perp = path.w_o - mu * wi;
+                        double dphi = 0.0;
+                        if (across > 1e-12 && glm::length(w_perp) > 1e-12) {
+                            const Vec3d e1 = perp / across, e2 = glm::cross(wi, e1);
+                            dphi = std::atan2(glm::dot(w_perp, e2), glm::dot(w_perp, e1));
+                        }
                         blk.along[k] += a;
                         blk.along2[k] += a * a;
                         blk.cos_theta[k] += mu;
@@ -544,7 +570,7 @@ struct ScatterCounts {
                                               grid.tt_along_bins)) *
                                 grid.tt_across_bins +
                             grid.uniform_bin(across, 0.0, ScatterometerGrid::across_max, grid.tt_across_bins);
-                        ++local.tt[k][cell];
+                        ++local.tt[k][cell * grid.tt_dphi_bins + ScatterometerGrid::dphi_bin(dphi, grid.tt_dphi_bins)];
                     }
                 }
             }
@@ -654,13 +680,13 @@ struct ScatterCounts {
 /// Container kind and version of scatterometer files.
 inline constexpr std::uint32_t grain_stats_kind = fourcc("SCAT");
 /// Payload layout version of SCAT files.
-inline constexpr std::uint32_t grain_stats_version = 1;
+inline constexpr std::uint32_t grain_stats_version = 2;
 
 /// Serialize to the container payload (see save_grain_stats).
 [[nodiscard]] inline std::vector<unsigned char> encode_grain_stats(const GrainStats& s) {
     ByteWriter w;
     const auto& g = s.grid;
-    w.put(g.phase_bins).put(g.tt_mu_bins).put(g.tt_along_bins).put(g.tt_across_bins).put(g.chord_bins);
+    w.put(g.phase_bins).put(g.tt_mu_bins).put(g.tt_along_bins).put(g.tt_across_bins).put(g.tt_dphi_bins).put(g.chord_bins);
     w.put(s.rays).put(s.hit).put(s.miss_chord).put(s.miss_chord2);
     for (const auto* a : {&s.exit, &s.along, &s.along2, &s.cos_theta, &s.cos_theta2, &s.terminated})
         w.put_array(a->data(), a->size());
@@ -679,6 +705,7 @@ inline constexpr std::uint32_t grain_stats_version = 1;
     g.tt_mu_bins = r.get<std::uint32_t>();
     g.tt_along_bins = r.get<std::uint32_t>();
     g.tt_across_bins = r.get<std::uint32_t>();
+    g.tt_dphi_bins = r.get<std::uint32_t>();
     g.chord_bins = r.get<std::uint32_t>();
     if (!g.valid()) r.fail("bad grid (bin counts out of range)");
     s.rays = r.get<std::uint64_t>();
@@ -699,7 +726,7 @@ inline constexpr std::uint32_t grain_stats_version = 1;
     return s;
 }
 
-/// Save statistics to `path` (container kind "SCAT" v1, checksummed, written atomically).
+/// Save statistics to `path` (container kind "SCAT" v2, checksummed, written atomically).
 /// Throws grainlight::io_error if the file cannot be written.
 inline void save_grain_stats(const std::filesystem::path& path, const GrainStats& s) {
     write_container_atomic(path, grain_stats_kind, grain_stats_version, encode_grain_stats(s));
