@@ -68,7 +68,9 @@ struct ParticleModel {
     }
 };
 
-/// One particle: amplitudes, cross sections and phase function (Eqs. 1-3).
+/// One particle: amplitudes, cross sections and phase function (Eqs. 1-3). Construction of a
+/// GOA particle integrates Eq. 2 numerically (~13 x evaluations: ~0.1 s at r = 1 mm, 0.55 um);
+/// bulk integration (bulk.hpp) does not use this class and caches rays instead.
 class SingleParticle {
 public:
     /// radius_um > 0, wavelength_um (vacuum) > 0; model validated.
