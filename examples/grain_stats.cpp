@@ -5,6 +5,8 @@
 //               [--ior N] [--albedo A] [--interior-sigma-a S] [--interior-sigma-s S] [--interior-g G]
 //               --grain-radius R --rays P --seed S
 //   grain_stats --preset glass-bead|snow|salt|sugar|brown-sugar|sand|flour|rice [--rays P] [--seed S]
+//   grain_stats --preset salt,flour --weights 0.7,0.3      (a mixture, Meng15 Sec. 4.2.3)
+//   grain_stats --load a.scat[,b.scat --weights wa,wb]     (saved statistics; bad files: clear error)
 //
 // The packing's bounding sphere has radius 1; the grain is scaled so that its own bounding sphere
 // has radius R <= 1. --albedo and --interior-sigma-* take one value or r,g,b. Writes the
@@ -12,8 +14,11 @@
 // The last line of stdout is one JSON object:
 //   {"beta":..,"lambda_delta":..,"lambda_s":..,"alpha_s":..,"g":..}
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "common/cli.hpp"
 #include "common/output.hpp"
@@ -49,20 +54,75 @@ int main(int argc, char** argv) {
             .option("grain-radius", "radius R of the grain's bounding sphere, 0 < R <= 1")
             .option("grain-seed", "seed of the procedural shape", "1")
             .option("mesh-level", "icosphere subdivision level of mesh grains (20*4^level triangles)", "5")
-            .option("rays", "incident rays", "200000 (quick) / 2000000 (full)");
+            .option("rays", "incident rays", "200000 (quick) / 2000000 (full)")
+            .option("load", "FILE[,FILE...]: statistics saved earlier (.scat) instead of running the scatterometer")
+            .option("weights", "w1,w2,...: mix the grains of --preset/--load (Meng15 Sec. 4.2.3); w >= 0, positive sum");
         cli.finish();
         const bool full = cli.full_quality();
         const auto out = cli.out_dir("out/grain_stats");
         const int threads = cli.threads();
 
-        gl::GrainPreset grain;
-        if (cli.has("preset")) {
-            for (const char* o : {"shape", "material", "ior", "albedo", "interior-sigma-a", "interior-sigma-s",
-                                  "interior-g", "grain-radius", "grain-seed"})
-                if (cli.has(o)) throw cli_error(std::string("--") + o + " cannot be combined with --preset");
-            grain = gl::grain_preset(cli.str("preset"));
+        // Where the statistics come from: saved files (--load), presets (--preset, a list mixes
+        // them with --weights), or one grain described on the command line (--shape ...).
+        auto split = [](const std::string& v) {
+            std::vector<std::string> out;
+            std::string item;
+            std::stringstream ss(v);
+            while (std::getline(ss, item, ',')) out.push_back(item);
+            return out;
+        };
+        std::vector<gl::GrainStats> parts;
+        std::vector<std::string> names;
+        gl::GrainPreset grain;  // the single grain (for the summary line)
+        std::string source;
+        double secs = 0;
+        gl::ScatterometerConfig cfg;
+        cfg.rays = cli.integer("rays", full ? 2000000 : 200000);
+        cfg.seed = cli.seed();
+        const auto level = cli.integer("mesh-level", 5);
+        if (level > 7) throw cli_error("--mesh-level must be <= 7");
+        auto run = [&](const gl::GrainPreset& g) {
+            const auto scat = gl::ScatterometerGrain::procedural(g.shape, g.radius, g.material, g.seed, int(level));
+            ProgressBar bar("scatterometer " + g.name, cfg.rays);
+            std::uint64_t last = 0;
+            cfg.progress = [&](std::uint64_t done, std::uint64_t) {
+                bar.advance(done - last);
+                last = done;
+            };
+            auto st = gl::run_scatterometer(scat, cfg);
+            bar.done();
+            secs += bar.seconds();
+            return st;
+        };
+        const bool by_shape = cli.has("shape");
+        if (int(cli.has("load")) + int(cli.has("preset")) + int(by_shape) != 1)
+            throw cli_error("give exactly one of --preset, --shape or --load (see --help)");
+        if (!by_shape)
+            for (const char* o : {"material", "ior", "albedo", "interior-sigma-a", "interior-sigma-s", "interior-g",
+                                  "grain-radius", "grain-seed"})
+                if (cli.has(o)) throw cli_error(std::string("--") + o + " needs --shape (not --preset or --load)");
+        // Check the mixing weights before any work (same rules as mix_grain_stats).
+        if (cli.has("weights")) {
+            const std::size_t n = cli.has("load")     ? split(cli.str("load")).size()
+                                  : cli.has("preset") ? split(cli.str("preset")).size()
+                                                      : 1;
+            (void)gl::validate_mix_weights(cli.list("weights", {}), n);
+        }
+        if (cli.has("load")) {
+            for (const auto& f : split(cli.str("load"))) {
+                parts.push_back(gl::load_grain_stats(f));
+                std::string n = std::filesystem::path(f).stem().string();
+                if (n.rfind("grain_stats_", 0) == 0) n = n.substr(12);
+                names.push_back(n);
+            }
+            source = "loaded from " + cli.str("load");
+        } else if (cli.has("preset")) {
+            for (const auto& n : split(cli.str("preset"))) {
+                grain = gl::grain_preset(n);
+                parts.push_back(run(grain));
+                names.push_back(grain.name);
+            }
         } else {
-            if (!cli.has("shape")) throw cli_error("give --preset or --shape (see --help)");
             if (!cli.has("material")) throw cli_error("--shape needs --material");
             if (!cli.has("grain-radius")) throw cli_error("--shape needs --grain-radius");
             grain.name = cli.str("shape");
@@ -82,26 +142,26 @@ int main(int argc, char** argv) {
             } else {
                 throw cli_error("--material = '" + mat + "' must be dielectric, diffuse or absorbing-dielectric");
             }
+            parts.push_back(run(grain));
+            names.push_back(grain.name);
         }
-        const auto level = cli.integer("mesh-level", 5);
-        if (level > 7) throw cli_error("--mesh-level must be <= 7");
-        const auto scat = gl::ScatterometerGrain::procedural(grain.shape, grain.radius, grain.material, grain.seed, int(level));
-
-        gl::ScatterometerConfig cfg;
-        cfg.rays = cli.integer("rays", full ? 2000000 : 200000);
-        cfg.seed = cli.seed();
-        ProgressBar bar("scatterometer " + grain.name, cfg.rays);
-        std::uint64_t last = 0;
-        cfg.progress = [&](std::uint64_t done, std::uint64_t) {
-            bar.advance(done - last);
-            last = done;
-        };
-        const auto stats = gl::run_scatterometer(scat, cfg);
-        bar.done();
-        const double secs = bar.seconds();
+        if (parts.empty()) throw cli_error("nothing to do: empty --preset/--load list");
+        if (parts.size() > 1 && !cli.has("weights"))
+            throw cli_error("a list of " + std::to_string(parts.size()) + " grains needs --weights (one per grain)");
+        const bool mixed = cli.has("weights");
+        gl::GrainStats stats;
+        std::string label = names[0];
+        if (mixed) {
+            const auto w = cli.list("weights", {});
+            stats = gl::mix_grain_stats(parts, w);  // validates: sizes, w >= 0, positive sum
+            label = "mix";
+            for (std::size_t k = 0; k < names.size(); ++k) label += "_" + names[k];
+        } else {
+            stats = parts[0];
+        }
 
         // Files: statistics, per-channel phase table (density of cos theta per channel), plot.
-        const std::string stem = "grain_stats_" + grain.name;
+        const std::string stem = "grain_stats_" + label;
         gl::save_grain_stats(out / (stem + ".scat"), stats);
         const auto phase = stats.phase<double, gl::RGBd>();
         const auto edges = phase.grid();
@@ -123,10 +183,16 @@ int main(int argc, char** argv) {
                              "ax.legend(); fig.tight_layout(); fig.savefig(png, dpi=120)\n",
                              out / (stem + "_phase.png"));
 
-        std::printf("grain %s: shape %s, R = %.3f, material %s, %llu rays, seed %llu, %d threads, %.2f s (%.3g rays/s)\n",
-                    grain.name.c_str(), std::string(gl::to_string(grain.shape)).c_str(), grain.radius,
-                    std::string(gl::to_string(grain.material.kind)).c_str(), (unsigned long long)cfg.rays,
-                    (unsigned long long)cfg.seed, threads, secs, double(cfg.rays) / std::max(secs, 1e-9));
+        if (!source.empty() || mixed) {
+            std::printf("grain %s (%s%s), %llu rays%s\n", label.c_str(), source.empty() ? "scatterometer" : source.c_str(),
+                        mixed ? (", mixed with --weights " + cli.str("weights")).c_str() : "",
+                        (unsigned long long)stats.rays, mixed ? " (smallest component)" : "");
+        } else {
+            std::printf("grain %s: shape %s, R = %.3f, material %s, %llu rays, seed %llu, %d threads, %.2f s (%.3g rays/s)\n",
+                        grain.name.c_str(), std::string(gl::to_string(grain.shape)).c_str(), grain.radius,
+                        std::string(gl::to_string(grain.material.kind)).c_str(), (unsigned long long)cfg.rays,
+                        (unsigned long long)cfg.seed, threads, secs, double(cfg.rays) / std::max(secs, 1e-9));
+        }
         std::printf("  beta         = %.4f +- %.4f\n", stats.beta(), stats.beta_stderr());
         std::printf("  lambda_delta = %.4f +- %.4f\n", stats.lambda_delta(), stats.lambda_delta_stderr());
         for (std::size_t c = 0; c < 3; ++c)
@@ -135,7 +201,8 @@ int main(int argc, char** argv) {
                         stats.teleport_along(c), stats.g(c));
         std::printf("  terminated (bounce limit or mesh leak, counted as absorbed): %.2g %.2g %.2g\n", stats.terminated[0],
                     stats.terminated[1], stats.terminated[2]);
-        if (const auto* col = gl::find_meng15_table1(grain.paper_column)) {
+        const auto* col = (parts.size() == 1 && source.empty()) ? gl::find_meng15_table1(grain.paper_column) : nullptr;
+        if (col) {
             std::printf("  channel average vs Meng15 Table 1 (%s):\n", col->name);
             std::printf("    beta %.2f (paper %.2f), lambda_delta %.2f (paper %.2f), lambda_s %.2f (paper %.2f), alpha_s %.2f (paper %.2f)\n",
                         stats.beta(), col->beta, stats.lambda_delta(), col->lambda_delta, stats.lambda_s_avg(),

@@ -34,3 +34,26 @@ if(TARGET grain_stats OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_
   set_tests_properties(grain_stats_json_glass_bead grain_stats_json_small_sphere grain_stats_json_diffuse_sphere
                        PROPERTIES LABELS "example;precompute")
 endif()
+# grain_stats --load: truncated and corrupted scatterometer files (tests/data/grains_*.scat are the
+# first 200 bytes of a real file, the second with one header byte flipped) and bad mixing weights.
+if(TARGET grain_stats OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/grain_stats.cpp))
+  add_test(NAME grain_stats_truncated_file
+           COMMAND $<TARGET_FILE:grain_stats> --load ${CMAKE_CURRENT_SOURCE_DIR}/data/grains_truncated.scat
+                   --out ${CMAKE_CURRENT_BINARY_DIR}/grain_stats_out)
+  set_tests_properties(grain_stats_truncated_file PROPERTIES PASS_REGULAR_EXPRESSION "truncated" LABELS "example;precompute")
+  add_test(NAME grain_stats_corrupted_file
+           COMMAND $<TARGET_FILE:grain_stats> --load ${CMAKE_CURRENT_SOURCE_DIR}/data/grains_corrupt_header.scat
+                   --out ${CMAKE_CURRENT_BINARY_DIR}/grain_stats_out)
+  set_tests_properties(grain_stats_corrupted_file PROPERTIES PASS_REGULAR_EXPRESSION "corrupted header"
+                       LABELS "example;precompute")
+  add_test(NAME grain_stats_zero_weights
+           COMMAND $<TARGET_FILE:grain_stats> --preset salt,flour --weights 0,0 --rays 100
+                   --out ${CMAKE_CURRENT_BINARY_DIR}/grain_stats_out)
+  set_tests_properties(grain_stats_zero_weights PROPERTIES PASS_REGULAR_EXPRESSION "sum of weights = 0"
+                       LABELS "example;precompute")
+  add_test(NAME grain_stats_negative_weight
+           COMMAND $<TARGET_FILE:grain_stats> --preset salt,flour --weights 1,-0.5 --rays 100
+                   --out ${CMAKE_CURRENT_BINARY_DIR}/grain_stats_out)
+  set_tests_properties(grain_stats_negative_weight PROPERTIES PASS_REGULAR_EXPRESSION "weights\\[1\\] = -0.5"
+                       LABELS "example;precompute")
+endif()

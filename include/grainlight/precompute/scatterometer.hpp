@@ -634,18 +634,26 @@ struct ScatterCounts {
 /// equal beta and alpha_s this is the plain weighted average of the paper. Throws
 /// grainlight::invalid_argument if the lists are empty or of different sizes, a weight is
 /// negative or not finite, the weights do not sum to a positive number, or the grids differ.
-[[nodiscard]] inline GrainStats mix_grain_stats(std::span<const GrainStats> stats, std::span<const double> weights) {
+/// Validate mixing weights for `count` grains (as mix_grain_stats does): sizes equal, every
+/// weight finite and >= 0, positive sum. Returns the sum; throws grainlight::invalid_argument.
+inline double validate_mix_weights(std::span<const double> weights, std::size_t count) {
     const char* who = "mix_grain_stats";
-    check_argument(!stats.empty(), who, "number of grains", stats.size(), ">= 1");
-    check_argument(weights.size() == stats.size(), who, "weights.size()", weights.size(),
-                   "equal to the number of grains (" + std::to_string(stats.size()) + ")");
+    check_argument(count >= 1, who, "number of grains", count, ">= 1");
+    check_argument(weights.size() == count, who, "weights.size()", weights.size(),
+                   "equal to the number of grains (" + std::to_string(count) + ")");
     double wsum = 0;
     for (std::size_t k = 0; k < weights.size(); ++k) {
         check_argument(std::isfinite(weights[k]) && weights[k] >= 0.0, who, "weights[" + std::to_string(k) + "]",
                        weights[k], "finite and >= 0");
         wsum += weights[k];
     }
-    check_argument(wsum > 0.0, who, "sum of weights", wsum, "> 0");
+    check_argument(wsum > 0.0 && std::isfinite(wsum), who, "sum of weights", wsum, "> 0");
+    return wsum;
+}
+
+[[nodiscard]] inline GrainStats mix_grain_stats(std::span<const GrainStats> stats, std::span<const double> weights) {
+    const char* who = "mix_grain_stats";
+    const double wsum = validate_mix_weights(weights, stats.size());
     GrainStats m;
     m.grid = stats[0].grid;
     m.rays = std::numeric_limits<std::uint64_t>::max();
