@@ -109,7 +109,7 @@ TEST_CASE("SingleParticle: Mie below 2 um, GOA from 2 um, Eqs. 1-3", "[optics][p
         if (p->method() == ScatteringMethod::mie) {
             CHECK(integral == Approx(1.0).epsilon(1e-6));
         } else {
-            CHECK(integral == Approx(1.0).epsilon(5e-3));  // GOA rainbow singularities limit the quadrature
+            CHECK(integral == Approx(1.0).epsilon(1e-3));
         }
     }
     // Host index: water host, glass particle: x = 2 pi n_host r / lambda, m = 1.5 / 1.33.

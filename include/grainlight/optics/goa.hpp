@@ -510,7 +510,9 @@ private:
 /// Angular moments of the GOA intensity, I_k = int_{-1}^{1} (|S1|^2 + |S2|^2) mu^k dmu for k = 0, 1
 /// (so the numerically integrated Qsca = I_0 / alpha^2 and g = I_1 / I_0). Quadrature in theta:
 /// 4-point Gauss panels of width 0.25/alpha over the diffraction peak (theta < 20/alpha), then
-/// panels of width max(1/alpha, pi/40000) (4 nodes per fringe period pi/alpha up to alpha ~ 1e4).
+/// panels of width max(1/alpha, pi/40000) (4 nodes per fringe period pi/alpha up to alpha ~ 1e4),
+/// split at 90 deg and at the rainbow angles, next to which theta = s +- u^2 removes the
+/// integrable 1/sqrt singularity.
 struct GoaMoments {
     double i0 = 0, i1 = 0;
 };
@@ -531,12 +533,57 @@ struct GoaMoments {
     const double peak = std::min(20.0 / a, 0.5 * pi);
     const int n_peak = std::max(1, int(std::ceil(peak / (0.25 / a))));
     for (int i = 0; i < n_peak; ++i) panel(peak * i / n_peak, peak * (i + 1) / n_peak);
-    // Split at 90 deg (diffraction is cut there, Eq. 11).
-    for (auto [lo, hi] : {std::pair{peak, 0.5 * pi}, std::pair{0.5 * pi, pi}}) {
+    // Breakpoints: 90 deg (diffraction is cut there, Eq. 11) and the rainbow angles, where the
+    // intensity has an integrable 1/sqrt singularity: next to them integrate in u with
+    // theta = s +- u^2, which makes the integrand smooth.
+    std::vector<double> cuts = {peak, 0.5 * pi, pi};
+    std::vector<double> bows;
+    const double n = goa.m().real();
+    for (int p = 2; p <= goa.p_max() && n > 1; ++p) {
+        const double c2 = (n * n - 1) / double(p * p - 1);
+        if (c2 >= 1) continue;
+        const double ti = std::acos(std::sqrt(c2));
+        const double tp = 2 * p * std::asin(std::sin(ti) / n) - 2 * ti - (p - 1) * pi;
+        const double th = std::abs(std::remainder(tp, 2 * pi));
+        if (th > peak && th < pi) {
+            cuts.push_back(th);
+            bows.push_back(th);
+        }
+    }
+    std::sort(cuts.begin(), cuts.end());
+    auto is_bow = [&](double t) { return std::find(bows.begin(), bows.end(), t) != bows.end(); };
+    const double h = std::max(1.0 / a, pi / 40000);
+    auto uniform = [&](double lo, double hi) {
+        const int k = std::max(1, int(std::ceil((hi - lo) / h)));
+        for (int i = 0; i < k; ++i) panel(lo + (hi - lo) * i / k, lo + (hi - lo) * (i + 1) / k);
+    };
+    // Half-segment [s, s + sign L] next to a singular point s, in u = sqrt(|theta - s|).
+    auto graded = [&](double s, double sign, double len) {
+        const double umax = std::sqrt(len);
+        const int k = std::max(4, int(std::ceil(2 * umax * umax / h)));
+        for (int i = 0; i < k; ++i) {
+            const double u0 = umax * i / k, u1 = umax * (i + 1) / k;
+            for (int g = 0; g < 4; ++g) {
+                const double u = 0.5 * (u0 + u1) + 0.5 * (u1 - u0) * xg[g];
+                const double t = s + sign * u * u;
+                const auto amp = goa.amplitudes_at_angle(t);
+                const double w = 0.5 * (u1 - u0) * wg[g] * 2 * u * std::sin(t) * (std::norm(amp.S1) + std::norm(amp.S2));
+                m.i0 += w;
+                m.i1 += w * std::cos(t);
+            }
+        }
+    };
+    for (std::size_t c = 0; c + 1 < cuts.size(); ++c) {
+        const double lo = cuts[c], hi = cuts[c + 1];
         if (hi <= lo) continue;
-        const double h = std::max(1.0 / a, pi / 40000);
-        const int n = std::max(1, int(std::ceil((hi - lo) / h)));
-        for (int i = 0; i < n; ++i) panel(lo + (hi - lo) * i / n, lo + (hi - lo) * (i + 1) / n);
+        const bool blo = is_bow(lo), bhi = is_bow(hi);
+        if (!blo && !bhi) {
+            uniform(lo, hi);
+            continue;
+        }
+        const double mid = 0.5 * (lo + hi);
+        if (blo) graded(lo, 1.0, mid - lo); else uniform(lo, mid);
+        if (bhi) graded(hi, -1.0, hi - mid); else uniform(mid, hi);
     }
     return m;
 }
