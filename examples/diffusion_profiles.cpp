@@ -6,7 +6,8 @@
 // Monte Carlo radial profile from the library's walk kernel (scene/slab.hpp SlabScene with an
 // infinite thickness, ContinuousMedium, Henyey-Greenstein phase, analog photon walks).
 //
-// Cases: albedo 0.99 and 0.9, g = 0 and 0.8, sigma_t = 1; the diffusion models get the reduced
+// Cases: albedo 0.99 and 0.9, g = 0 and 0.8, sigma_t = 1, half-space; plus a slab of optical
+// depth 4 (albedo 0.99, g = 0) with R(r) and T(r) against the multipole. The diffusion models get the reduced
 // parameters sigma_s' = a (1 - g) sigma_t, sigma_a = (1 - a) sigma_t (Meng15 Sec. 4.2.3).
 // The MC counts every path leaving the surface (single scattering included), binned in
 // log-spaced annuli of r sigma_t' (R = count / (paths * annulus area)).
@@ -45,11 +46,16 @@ constexpr double r_lo = 0.01, r_hi = 100.0;  // in units of 1 / sigma_t'
 double bin_edge(int i) { return r_lo * std::pow(r_hi / r_lo, double(i) / n_bins); }
 
 struct RadialTally {
-    std::vector<std::uint64_t> counts = std::vector<std::uint64_t>(n_bins, 0);
-    std::uint64_t reflected = 0, paths = 0;
+    std::vector<std::uint64_t> counts_R = std::vector<std::uint64_t>(n_bins, 0);
+    std::vector<std::uint64_t> counts_T = std::vector<std::uint64_t>(n_bins, 0);
+    std::uint64_t reflected = 0, transmitted = 0, paths = 0;
     void merge(const RadialTally& o) {
-        for (int i = 0; i < n_bins; ++i) counts[std::size_t(i)] += o.counts[std::size_t(i)];
+        for (int i = 0; i < n_bins; ++i) {
+            counts_R[std::size_t(i)] += o.counts_R[std::size_t(i)];
+            counts_T[std::size_t(i)] += o.counts_T[std::size_t(i)];
+        }
         reflected += o.reflected;
+        transmitted += o.transmitted;
         paths += o.paths;
     }
 };
@@ -61,12 +67,12 @@ RadialTally run_block(const SceneT& scene, double sigma_t_prime, std::uint64_t f
         RadialTally* t;
         double st;
         void on_escape(const PathState<double, S>& st_) noexcept {
-            if (st_.ray.d.z <= 0) return;
-            ++t->reflected;
+            const bool up = st_.ray.d.z > 0;
+            ++(up ? t->reflected : t->transmitted);
             const double r = std::hypot(st_.ray.o.x, st_.ray.o.y) * st;  // in reduced mfp
             if (r < r_lo || r >= r_hi) return;
             const int b = std::min(n_bins - 1, int(std::log(r / r_lo) / std::log(r_hi / r_lo) * n_bins));
-            ++t->counts[std::size_t(b)];
+            ++(up ? t->counts_R : t->counts_T)[std::size_t(b)];
         }
     };
     RadialTally tally;
@@ -140,26 +146,31 @@ int main(int argc, char** argv) {
         const auto out = cli.out_dir();
 
         struct Case {
-            double a, g;
+            double a, g, B;  // albedo, HG g, optical depth sigma_t d (inf = half-space)
         };
-        const Case cases[] = {{0.99, 0.0}, {0.9, 0.0}, {0.99, 0.8}, {0.9, 0.8}};
-        gl_examples::Csv csv({"albedo", "g", "r_reduced", "r", "R_mc", "R_mc_stderr", "R_classical", "R_improved",
-                              "R_multipole"});
+        const double inf = std::numeric_limits<double>::infinity();
+        const Case cases[] = {{0.99, 0.0, inf}, {0.9, 0.0, inf}, {0.99, 0.8, inf}, {0.9, 0.8, inf}, {0.99, 0.0, 4.0}};
+        gl_examples::Csv csv({"case", "albedo", "g", "optical_depth", "face", "r_reduced", "r", "mc", "mc_stderr",
+                              "dipole", "improved", "multipole_classical", "multipole_improved"});
         std::vector<std::string> json_lines;
-        std::printf("%-6s %-4s | %-17s | %-9s %-9s %-9s | %-9s | %s\n", "albedo", "g", "MC R (+- se)", "classical",
-                    "improved", "multipole", "exact", "seconds");
+        std::printf("%-6s %-4s %-4s %-2s | %-17s | %-8s %-8s %-8s %-8s | %-8s | %s\n", "albedo", "g", "B", "", "MC (+- se)",
+                    "dipole", "improved", "mp_class", "mp_impr", "exact", "seconds");
+        int case_index = 0;
         for (const Case& c : cases) {
             const double sigma_t = 1.0, ss = c.a * (1 - c.g) * sigma_t, sa = (1 - c.a) * sigma_t, st = ss + sa;
-            const SceneT scene(MediumT(sigma_t, c.a, Phase(c.g)), std::numeric_limits<double>::infinity(), 1.0);
+            const bool slab = std::isfinite(c.B);
+            const double d = slab ? c.B / sigma_t : 50.0 / st;  // half-space: multipole at 50 mfp'
+            const SceneT scene(MediumT(sigma_t, c.a, Phase(c.g)), slab ? c.B / sigma_t : inf, 1.0);
             const ClassicalDipole<double> dip(ss, sa, 1.0);
             const ImprovedDiffusion<double> imp(ss, sa, 1.0);
-            const MultipoleSlab<double> mp(ss, sa, 1.0, 50.0 / st, DiffusionModel::improved);
+            const MultipoleSlab<double> mpc(ss, sa, 1.0, d, DiffusionModel::classical);
+            const MultipoleSlab<double> mpi(ss, sa, 1.0, d, DiffusionModel::improved);
 
             // Fixed-size blocks reduced in block order: identical numbers for any thread count.
             const std::uint64_t block = 4096, n_blocks = (paths + block - 1) / block;
             std::vector<RadialTally> tallies(n_blocks);
             char label[64];
-            std::snprintf(label, sizeof label, "a=%.2f g=%.1f", c.a, c.g);
+            std::snprintf(label, sizeof label, "a=%.2f g=%.1f B=%g", c.a, c.g, c.B);
             gl_examples::ProgressBar bar(label, n_blocks);
             const auto t0 = std::chrono::steady_clock::now();
 #pragma omp parallel for schedule(dynamic, 1)
@@ -173,55 +184,84 @@ int main(int argc, char** argv) {
             for (const auto& x : tallies) t.merge(x);
             const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-            for (int i = 0; i < n_bins; ++i) {
-                const double r0 = bin_edge(i) / st, r1 = bin_edge(i + 1) / st;  // physical units
-                const double area = M_PI * (r1 * r1 - r0 * r0);
-                const double p = double(t.counts[std::size_t(i)]) / double(t.paths);
-                const double r = std::sqrt(r0 * r1);
-                csv.row({c.a, c.g, r * st, r, p / area, std::sqrt(p * (1 - p) / double(t.paths)) / area, dip.R(r),
-                         imp.R(r), mp.R(r)});
+            for (int face = 0; face < (slab ? 2 : 1); ++face) {
+                const auto& counts = face == 0 ? t.counts_R : t.counts_T;
+                for (int i = 0; i < n_bins; ++i) {
+                    const double r0 = bin_edge(i) / st, r1 = bin_edge(i + 1) / st;  // physical units
+                    const double area = M_PI * (r1 * r1 - r0 * r0);
+                    const double p = double(counts[std::size_t(i)]) / double(t.paths);
+                    const double r = std::sqrt(r0 * r1);
+                    csv.row({double(case_index), c.a, c.g, slab ? c.B : -1.0, double(face), r * st, r, p / area,
+                             std::sqrt(p * (1 - p) / double(t.paths)) / area, face == 0 ? dip.R(r) : 0.0,
+                             face == 0 ? imp.R(r) : 0.0, face == 0 ? mpc.R(r) : mpc.T(r), face == 0 ? mpi.R(r) : mpi.T(r)});
+                }
             }
-            const double R_mc = double(t.reflected) / double(t.paths);
-            const double R_se = std::sqrt(R_mc * (1 - R_mc) / double(t.paths));
-            const double exact = c.g == 0.0 ? exact_halfspace(c.a) : std::nan("");
-            std::printf("%-6.2f %-4.1f | %.5f +- %.5f | %.5f   %.5f   %.5f   | %-9s | %.1f\n", c.a, c.g, R_mc, R_se,
-                        dip.total_reflectance(), imp.total_reflectance(), mp.totals().R,
-                        c.g == 0.0 ? std::to_string(exact).substr(0, 7).c_str() : "-", seconds);
+            const double n = double(t.paths);
+            const double R_mc = double(t.reflected) / n, R_se = std::sqrt(R_mc * (1 - R_mc) / n);
+            // diffuse T: the unscattered beam e^{-B} leaves at r = 0 and is not a diffusion quantity
+            const double T_mc = double(t.transmitted) / n, T_se = std::sqrt(T_mc * (1 - T_mc) / n);
+            const double T_ball = slab ? std::exp(-c.B) : 0.0;
+            const double exact = (c.g == 0.0 && !slab) ? exact_halfspace(c.a) : std::nan("");
+            const auto tc = mpc.totals(), ti = mpi.totals();
+            char ex[32] = "-";
+            if (std::isfinite(exact)) std::snprintf(ex, sizeof ex, "%.5f", exact);
+            std::printf("%-6.2f %-4.1f %-4g R  | %.5f +- %.5f | %.5f  %.5f  %.5f  %.5f  | %-8s | %.1f\n", c.a, c.g, c.B,
+                        R_mc, R_se, dip.total_reflectance(), imp.total_reflectance(), tc.R, ti.R, ex, seconds);
+            if (slab)
+                std::printf("%-6s %-4s %-4s T  | %.5f +- %.5f | %-8s %-8s %.5f  %.5f  | %-8s |\n", "", "", "",
+                            T_mc - T_ball, T_se, "-", "-", tc.T, ti.T, "-");
             gl_examples::Json j;
             j.num("albedo", c.a)
                 .num("g", c.g)
+                .num("optical_depth", c.B)
                 .num("R_mc", R_mc)
                 .num("R_mc_stderr", R_se)
-                .num("R_classical", dip.total_reflectance())
+                .num("T_diffuse_mc", T_mc - T_ball)
+                .num("T_mc_stderr", T_se)
+                .num("R_dipole", dip.total_reflectance())
                 .num("R_improved", imp.total_reflectance())
-                .num("R_multipole", mp.totals().R)
+                .num("R_multipole_classical", tc.R)
+                .num("R_multipole_improved", ti.R)
+                .num("T_multipole_classical", tc.T)
+                .num("T_multipole_improved", ti.T)
                 .num("R_exact", exact)
                 .integer("paths", (long long)t.paths)
                 .num("seconds", seconds);
             json_lines.push_back(j.str());
+            ++case_index;
         }
-        std::printf("(classical = Jensen 2001 dipole; improved = d'Eon & Irving 2011 / PBD beam; multipole = Donner & "
-                    "Jensen 2005 with improved terms, d = 50 / sigma_t'; exact = 1 - H(1) sqrt(1 - a), g = 0 only)\n");
+        std::printf("(dipole = Jensen 2001 classical dipole; improved = d'Eon & Irving 2011 / PBD beam, half-space;\n"
+                    " mp_class / mp_impr = Donner & Jensen 2005 multipole with classical / improved terms, slab of B\n"
+                    " (d = 50 / sigma_t' for the half-space rows); T rows: diffuse transmittance, MC minus e^{-B};\n"
+                    " exact = 1 - H(1) sqrt(1 - a), isotropic half-space only)\n");
         csv.write(out / "diffusion_profiles.csv");
-        const std::string script = R"(
-d = read_csv(r''')" + (out / "diffusion_profiles.csv").string() + R"(''')
-a = np.array(d['albedo']); g = np.array(d['g']); x = np.array(d['r_reduced'])
-fig, axes = plt.subplots(2, 2, figsize=(10, 8))
-for ax, (aa, gg) in zip(axes.flat, [(0.99, 0.0), (0.9, 0.0), (0.99, 0.8), (0.9, 0.8)]):
-    m = (np.abs(a - aa) < 1e-9) & (np.abs(g - gg) < 1e-9)
-    st = (aa * (1 - gg) + (1 - aa))
-    scale = 1.0 / st**2  # R in units of sigma_t'^2
-    ax.errorbar(x[m], np.array(d['R_mc'])[m] * scale, yerr=np.array(d['R_mc_stderr'])[m] * scale, fmt='k.', ms=3, label='Monte Carlo')
-    ax.loglog(x[m], np.array(d['R_classical'])[m] * scale, label='classical dipole')
-    ax.loglog(x[m], np.array(d['R_improved'])[m] * scale, label='improved (PBD)')
-    ax.loglog(x[m], np.array(d['R_multipole'])[m] * scale, '--', label='multipole, d = 50 mfp\'')
-    ax.set_title(f'albedo {aa}, g = {gg}')
-    ax.set_xlabel("r sigma_t'"); ax.set_ylabel("R(r) / sigma_t'^2")
+        const std::string script = R"PY(
+d = read_csv(r''')PY" + (out / "diffusion_profiles.csv").string() + R"PY(''')
+cols = {k: np.array(v) for k, v in d.items()}
+fig, axes = plt.subplots(2, 3, figsize=(14, 8.5))
+panels = [(0, 0), (1, 0), (2, 0), (3, 0), (4, 0), (4, 1)]
+for ax, (ci, face) in zip(axes.flat, panels):
+    m = (cols['case'] == ci) & (cols['face'] == face)
+    if not m.any(): continue
+    aa, gg, B = cols['albedo'][m][0], cols['g'][m][0], cols['optical_depth'][m][0]
+    st = aa * (1 - gg) + (1 - aa)
+    scale = 1.0 / st**2  # profiles in units of sigma_t'^2
+    x = cols['r_reduced'][m]
+    ax.errorbar(x, cols['mc'][m] * scale, yerr=cols['mc_stderr'][m] * scale, fmt='k.', ms=3, label='Monte Carlo (walk kernel)')
+    if face == 0:
+        ax.loglog(x, cols['dipole'][m] * scale, label='classical dipole (half-space)')
+        ax.loglog(x, cols['improved'][m] * scale, label='improved / PBD (half-space)')
+    ax.loglog(x, cols['multipole_classical'][m] * scale, ':', label='multipole, classical')
+    ax.loglog(x, cols['multipole_improved'][m] * scale, '--', label='multipole, improved')
+    geo = f'slab B = {B:g}' if B > 0 else "half-space (multipole d = 50 mfp')"
+    q = 'R' if face == 0 else 'T'
+    ax.set_title(f"{q}(r): albedo {aa}, g = {gg}, {geo}", fontsize=9)
+    ax.set_xlabel("r sigma_t'"); ax.set_ylabel(f"{q}(r) / sigma_t'^2")
     ax.set_ylim(1e-7, 1e2)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=6)
 fig.tight_layout()
 fig.savefig(png, dpi=110)
-)";
+)PY";
         gl_examples::plot_with_matplotlib(out / "diffusion_profiles_plot.py", script, out / "diffusion_profiles.png");
         for (const auto& l : json_lines) std::cout << l << "\n";
         std::cout.flush();
