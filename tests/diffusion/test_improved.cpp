@@ -92,3 +92,16 @@ TEST_CASE("Improved model quantities by hand", "[diffusion][improved]") {
     CHECK_THROWS_AS(ImprovedDiffusion<double>(1.0, 0.1, -1.3), grainlight::invalid_argument);
     CHECK_THROWS_AS(ImprovedDiffusion<double>(std::numeric_limits<double>::infinity(), 0.1), grainlight::invalid_argument);
 }
+
+TEST_CASE("Float instantiations agree with double", "[diffusion][improved]") {
+    const ClassicalDipole<float> df(0.95f, 0.05f, 1.3f);
+    const ClassicalDipole<double> dd(0.95, 0.05, 1.3);
+    const ImprovedDiffusion<float> imf(0.95f, 0.05f, 1.3f);
+    const ImprovedDiffusion<double> imd(0.95, 0.05, 1.3);
+    for (double r : {0.05, 0.5, 3.0}) {
+        CHECK(double(df.R(float(r))) == Approx(dd.R(r)).epsilon(1e-5));
+        CHECK(double(imf.point_R(float(r), 0.4f)) == Approx(imd.point_R(r, 0.4)).epsilon(1e-5));
+        CHECK(double(imf.R(float(r))) == Approx(imd.R(r)).epsilon(1e-4));
+    }
+    CHECK(double(imf.total_reflectance()) == Approx(imd.total_reflectance()).epsilon(1e-5));
+}
