@@ -172,6 +172,9 @@ int main(int argc, char** argv) {
                      phase.pdf_cos_theta(mid, 1), phase.pdf_cos_theta(mid, 2)});
         }
         const auto csv_path = out / (stem + "_phase.csv");
+        std::string title = label;  // safe inside a Python string literal
+        for (char& ch : title)
+            if (ch == '\'' || ch == '\\') ch = '_';
         csv.write(csv_path);
         plot_with_matplotlib(out / (stem + "_phase.py"),
                              "d = read_csv(r'''" + csv_path.string() + "''')\n"
@@ -179,7 +182,7 @@ int main(int argc, char** argv) {
                              "for k, c in (('p_r','r'),('p_g','g'),('p_b','b')):\n"
                              "    ax.semilogy(d['theta_deg'], np.array(d[k]) / (2*np.pi), color=c, label=k)\n"
                              "ax.set_xlabel('scattering angle theta [deg]'); ax.set_ylabel('Phi [1/sr]')\n"
-                             "ax.set_title('" + grain.name + ": scatterometer phase function (Meng15 Sec. 4.2.1)')\n"
+                             "ax.set_title('" + title + ": scatterometer phase function (Meng15 Sec. 4.2.1)')\n"
                              "ax.legend(); fig.tight_layout(); fig.savefig(png, dpi=120)\n",
                              out / (stem + "_phase.png"));
 
