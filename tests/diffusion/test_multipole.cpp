@@ -108,10 +108,10 @@ TEST_CASE("Thin-slab diffusion matches the library's slab Monte Carlo at high al
     // leaving each side, T the unscattered beam e^{-B}; the diffusion T gets e^{-B} added.
     // Tolerance 3 % relative + 3 standard errors: the improved model's own error. Measured
     // (docs/diffusion.md, 200k paths): R within 0.6 %, T +1.4 % (B = 4) and +2.5 % (B = 8); the
-    // half-space improved total at
-    // alpha' = 0.99 is +0.34 % off the exact H-function value (test_improved.cpp). A slab error
+    // half-space improved total at alpha' = 0.99 is +0.34 % off the exact H-function value
+    // (test_improved.cpp). A slab error
     // (wrong image spacing, wrong z_b, no bottom images) moves T by far more: the classical
-    // model with its source at 1 mfp is +6 % at B = 4, the half-space dipole has T = 0.
+    // model with its source at 1 mfp is +6.5 % at B = 4, the half-space dipole has T = 0.
     for (double B : {4.0, 8.0}) {
         SlabParams p;
         p.albedo = 0.99;
