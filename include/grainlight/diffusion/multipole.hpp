@@ -105,7 +105,8 @@ public:
     }
 
     /// Reflectance profile (1/length^2) on the top face at distance r from the point above a
-    /// unit-power isotropic point source at depth z in [0, d].
+    /// unit-power isotropic point source at depth z in [0, d] (singular at r = 0 for a source on
+    /// the face).
     [[nodiscard]] GRAINLIGHT_HOST_DEVICE F point_R(F r, F z) const noexcept { return face(r, z, false); }
     /// Transmittance profile (1/length^2) on the bottom face at distance r from the point below
     /// the source.
