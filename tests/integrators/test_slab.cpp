@@ -334,6 +334,7 @@ TEST_CASE("Refractive slabs n = 1.33 and 1.5 agree with an independent plane-par
         {0.9, 1.0, 0.9, 1.5, 0.5},   {0.95, 4.0, 0.7, 1.5, 1.0}, {0.9, inf, 0.5, 1.5, 0.5},
         {0.99, 4.0, 0.9, 1.0, 0.5},  // index-matched, strongly forward, oblique
         {0.9, 2.0, 0.5, 0.75, 0.8},  // slab of lower index than outside (a bubble layer)
+        {0.95, inf, 0.7, 1.0, 0.5},  // index-matched forward-scattering half-space, oblique
     };
     int k = 0;
     for (const Case& c : cases) {
