@@ -1,12 +1,13 @@
 // meng15_fig5_shape_of_grains: Meng15 Fig. 5 -- a procedural aggregate shape filled with
-// millions of grains, none of them stored: a sphere and a box (voxelized on the tile grid, 2 bits
-// per voxel) filled from a tiled MD packing with randomly rotated cube-like (crystal) or snow
+// millions of grains, none of them stored: a sphere and a box, or a lumpy triangle-mesh blob
+// (voxelized on the tile grid, 2 bits per voxel) filled from a tiled MD packing with randomly rotated cube-like (crystal) or snow
 // grains, rendered with explicit path tracing (integrators/ept.hpp) on a diffuse ground under a
 // quad light and a dim sky. Low-order (<= k grain interactions) and high-order contributions go
 // to separate images.
 //
 //   meng15_fig5_shape_of_grains [--quality quick|full] [--out DIR] [--seed S] [--threads N]
-//                               [--grain cube|snow] [--grain-radius R] [--spp N] [--exposure EV]
+//                               [--grain cube|snow] [--shape sphere-box|blob] [--grain-radius R]
+//                               [--spp N] [--exposure EV]
 //
 // Prints the grain count, the aggregate's memory (vs. what explicit per-grain transforms and a
 // BVH over instances would need) and the Algorithm 1 ray rate. Writes EXR (combined, low, high)
@@ -15,6 +16,7 @@
 #include <cstdio>
 #include <iostream>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "common/cli.hpp"
@@ -37,6 +39,7 @@ int main(int argc, char** argv) {
                 "Meng15 Fig. 5: a sphere and a box filled with millions of procedurally instanced grains (EPT)");
         cli.common_options("out/meng15_fig5_shape_of_grains")
             .option("grain", "cube | snow", "cube")
+            .option("shape", "sphere-box (a sphere and a box) | blob (a lumpy triangle-mesh blob)", "sphere-box")
             .option("grain-radius", "bounding-sphere radius of the grains (scene units; the sphere has radius 0.5)", "0.004")
             .option("spp", "samples per pixel (default: 8 quick, 64 full)")
             .option("exposure", "PNG exposure in stops", "1");
@@ -79,65 +82,80 @@ int main(int argc, char** argv) {
             }
             w = {1, 1, 1};
         }
-        using U = gl::UnionBoundary<gl::SphereBoundary, gl::BoxBoundary>;
-        const U shape{gl::SphereBoundary(gl::Vec3d(-0.6, 0.5, 0.0), 0.5),
-                      gl::BoxBoundary(gl::Vec3d(0.05, 0.0, -0.35), gl::Vec3d(1.0, 0.7, 0.35))};
-        const auto t_build0 = std::chrono::steady_clock::now();
-        gl::GranularAggregate<U> agg(tile, gl::VoxelizedBoundary<U>(shape, tile.side()), ex, w, seed);
-        const std::uint64_t n_grains = agg.grain_count();
-        const double build_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_build0).count();
-        const double mem_mb = double(agg.memory_bytes()) / 1e6;
-        // Explicit instancing: a 3x4 float transform + exemplar id per grain, plus a BVH over them (~2 nodes
-        // of 32 bytes per instance).
-        const double explicit_mb = double(n_grains) * (48.0 + 4.0 + 64.0) / 1e6;
+        const std::string shape_name = cli.str("shape", "sphere-box");
+        if (shape_name != "sphere-box" && shape_name != "blob")
+            throw cli_error("--shape = '" + shape_name + "' must be sphere-box or blob");
+        auto render = [&](const auto& shape) {
+            const auto t_build0 = std::chrono::steady_clock::now();
+            using Shape = std::decay_t<decltype(shape)>;
+            gl::GranularAggregate<Shape> agg(tile, gl::VoxelizedBoundary<Shape>(shape, tile.side()), ex, w, seed);
+            const std::uint64_t n_grains = agg.grain_count();
+            const double build_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_build0).count();
+            const double mem_mb = double(agg.memory_bytes()) / 1e6;
+            // Explicit instancing: a 3x4 float transform + exemplar id per grain, plus a BVH over them (~2 nodes
+            // of 32 bytes per instance).
+            const double explicit_mb = double(n_grains) * (48.0 + 4.0 + 64.0) / 1e6;
 
-        using Medium = gl::ContinuousMedium<gl::HenyeyGreenstein<float, gl::RGB>, gl::RGB>;
-        using Scene = gl::Scene<Medium>;
-        Scene scene;
-        scene.add_shape(gl::QuadShape<float>(gl::Vec3f(-4, 0, -4), gl::Vec3f(0, 0, 8), gl::Vec3f(8, 0, 0)),
-                        gl::Material<float, gl::RGB>::diffuse(gl::RGB{0.45f, 0.42f, 0.4f}));
-        scene.add_quad_light(gl::QuadShape<float>(gl::Vec3f(-1.5f, 3.0f, 0.5f), gl::Vec3f(1.5f, 0, 0), gl::Vec3f(0, 0, 1.5f)),
-                             gl::RGB{9.0f, 8.6f, 8.0f});
-        scene.add_light(Scene::LightT::environment_light(gl::RGB{0.10f, 0.12f, 0.16f}));
-        const gl::PinholeCamera<float> camera(gl::Vec3f(0.2f, 1.25f, 3.0f), gl::Vec3f(0.2f, 0.35f, 0.0f), gl::Vec3f(0, 1, 0),
-                                              32.0f, width, height);
-        gl::EptOptions opt;
-        opt.max_events = full ? 4096 : 512;
-        ProgressBar bar("fig5", std::uint64_t(height));
-        const auto t0 = std::chrono::steady_clock::now();
-        const gl::EptImages img = gl::render_ept(scene, agg, camera, int(spp), seed, threads, opt,
-                                                 [&](int n) { bar.advance(std::uint64_t(n)); });
-        bar.done();
-        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        const gl::Image all = img.combined();
-        gl::write_exr(out / "meng15_fig5_shape_of_grains.exr", all);
-        gl::write_exr(out / "meng15_fig5_low_order.exr", img.low.image());
-        gl::write_exr(out / "meng15_fig5_high_order.exr", img.high.image());
-        gl::write_png(out / "meng15_fig5_shape_of_grains.png", all, {exposure});
-        gl::write_png(out / "meng15_fig5_low_order.png", img.low.image(), {exposure});
-        gl::write_png(out / "meng15_fig5_high_order.png", img.high.image(), {exposure});
-        const double rays_per_s = double(img.grain_rays) / seconds;
-        std::printf("Meng15 Fig. 5: sphere + box of %s grains\n", grain.c_str());
-        std::printf("  grains: %llu (bounding radius %.4g, tile of %zu spheres, f = %.3f, %zu voxels of which %zu inside, "
-                    "%zu partial)\n",
-                    (unsigned long long)n_grains, r_grain, tile.size(), tile.packing_fraction(),
-                    agg.boundary().voxel_count(), agg.boundary().inside_count(), agg.boundary().partial_count());
-        std::printf("  memory: %.3f MB for the aggregate (voxels %.1f kB at 2 bits each) vs ~%.0f MB for explicit instances "
-                    "+ BVH (paper: 'storing the transformation matrices ... impractical')\n",
-                    mem_mb, double(agg.boundary().memory_bytes()) / 1e3, explicit_mb);
-        std::printf("  render: %dx%d, %llu spp, %.1f s on %d threads, %.3g Algorithm-1 rays/s (camera + shadow rays), setup %.2f s\n",
-                    width, height, (unsigned long long)spp, seconds, threads, rays_per_s, build_s);
-        std::printf("  low-order (<= %d grain interactions) mean %.4f, high-order mean %.4f (green channel)\n",
-                    opt.low_order_max, img.low.image().mean(1), img.high.image().mean(1));
-        std::printf("wrote %s/meng15_fig5_{shape_of_grains,low_order,high_order}.{exr,png}\n", out.c_str());
-        Json j;
-        j.integer("grains", (long long)n_grains)
-            .num("memory_mb", mem_mb)
-            .num("explicit_memory_mb", explicit_mb)
-            .num("rays_per_second", rays_per_s)
-            .num("seconds", seconds)
-            .integer("spp", (long long)spp);
-        std::cout << j.str() << std::endl;
+            using Medium = gl::ContinuousMedium<gl::HenyeyGreenstein<float, gl::RGB>, gl::RGB>;
+            using Scene = gl::Scene<Medium>;
+            Scene scene;
+            scene.add_shape(gl::QuadShape<float>(gl::Vec3f(-4, 0, -4), gl::Vec3f(0, 0, 8), gl::Vec3f(8, 0, 0)),
+                            gl::Material<float, gl::RGB>::diffuse(gl::RGB{0.45f, 0.42f, 0.4f}));
+            scene.add_quad_light(gl::QuadShape<float>(gl::Vec3f(-1.5f, 3.0f, 0.5f), gl::Vec3f(1.5f, 0, 0), gl::Vec3f(0, 0, 1.5f)),
+                                 gl::RGB{9.0f, 8.6f, 8.0f});
+            scene.add_light(Scene::LightT::environment_light(gl::RGB{0.10f, 0.12f, 0.16f}));
+            const gl::PinholeCamera<float> camera(gl::Vec3f(0.2f, 1.25f, 3.0f), gl::Vec3f(0.2f, 0.35f, 0.0f), gl::Vec3f(0, 1, 0),
+                                                  32.0f, width, height);
+            gl::EptOptions opt;
+            opt.max_events = full ? 4096 : 512;
+            ProgressBar bar("fig5", std::uint64_t(height));
+            const auto t0 = std::chrono::steady_clock::now();
+            const gl::EptImages img = gl::render_ept(scene, agg, camera, int(spp), seed, threads, opt,
+                                                     [&](int n) { bar.advance(std::uint64_t(n)); });
+            bar.done();
+            const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            const gl::Image all = img.combined();
+            gl::write_exr(out / "meng15_fig5_shape_of_grains.exr", all);
+            gl::write_exr(out / "meng15_fig5_low_order.exr", img.low.image());
+            gl::write_exr(out / "meng15_fig5_high_order.exr", img.high.image());
+            gl::write_png(out / "meng15_fig5_shape_of_grains.png", all, {exposure});
+            gl::write_png(out / "meng15_fig5_low_order.png", img.low.image(), {exposure});
+            gl::write_png(out / "meng15_fig5_high_order.png", img.high.image(), {exposure});
+            const double rays_per_s = double(img.grain_rays) / seconds;
+            std::printf("Meng15 Fig. 5: %s of %s grains\n", shape_name.c_str(), grain.c_str());
+            std::printf("  grains: %llu (bounding radius %.4g, tile of %zu spheres, f = %.3f, %zu voxels of which %zu inside, "
+                        "%zu partial)\n",
+                        (unsigned long long)n_grains, r_grain, tile.size(), tile.packing_fraction(),
+                        agg.boundary().voxel_count(), agg.boundary().inside_count(), agg.boundary().partial_count());
+            std::printf("  memory: %.3f MB for the aggregate (voxels %.1f kB at 2 bits each) vs ~%.0f MB for explicit instances "
+                        "+ BVH (paper: 'storing the transformation matrices ... impractical')\n",
+                        mem_mb, double(agg.boundary().memory_bytes()) / 1e3, explicit_mb);
+            std::printf("  render: %dx%d, %llu spp, %.1f s on %d threads, %.3g Algorithm-1 rays/s (camera + shadow rays), setup %.2f s\n",
+                        width, height, (unsigned long long)spp, seconds, threads, rays_per_s, build_s);
+            std::printf("  low-order (<= %d grain interactions) mean %.4f, high-order mean %.4f (green channel)\n",
+                        opt.low_order_max, img.low.image().mean(1), img.high.image().mean(1));
+            std::printf("wrote %s/meng15_fig5_{shape_of_grains,low_order,high_order}.{exr,png}\n", out.c_str());
+            Json j;
+            j.integer("grains", (long long)n_grains)
+                .num("memory_mb", mem_mb)
+                .num("explicit_memory_mb", explicit_mb)
+                .num("rays_per_second", rays_per_s)
+                .num("seconds", seconds)
+                .integer("spp", (long long)spp);
+            std::cout << j.str() << std::endl;
+        };
+        if (shape_name == "blob") {
+            // A lumpy, bunny-sized blob: the procedural snow shape scaled to radius 0.6, as a
+            // watertight triangle mesh boundary (voxelized by triangle rasterization + parity).
+            gl::TriangleMesh<float> blob = gl::make_grain_mesh<float>(gl::GrainShape::snow, 0.6f, 5, 3);
+            for (auto& v : blob.vertices) v += gl::Vec3f(0.2f, 0.55f, 0.0f);
+            blob.compute_face_normals();
+            render(gl::MeshBoundary(blob));
+        } else {
+            using U = gl::UnionBoundary<gl::SphereBoundary, gl::BoxBoundary>;
+            render(U{gl::SphereBoundary(gl::Vec3d(-0.6, 0.5, 0.0), 0.5),
+                     gl::BoxBoundary(gl::Vec3d(0.05, 0.0, -0.35), gl::Vec3d(1.0, 0.7, 0.35))});
+        }
         return 0;
     });
 }

@@ -76,6 +76,7 @@ TEST_CASE("voxelized union of sphere and box: point_inside matches the analytic 
                           std::int64_t(std::floor(p.z / 0.7)));
         const Vec3d local = p - 0.7 * Vec3d(rel);
         REQUIRE(vb.point_inside(vb.anchor() + rel, local) == u.inside(p));
+        REQUIRE(vb.refined());
     }
 }
 
@@ -127,15 +128,22 @@ TEST_CASE("voxelized mesh: icosphere vs the analytic sphere, majority-parity poi
     for (int i = 0; i < 5000; ++i) {
         Vec3d p = c + 7.0 * Vec3d(2 * rng.uniform<double>() - 1, 2 * rng.uniform<double>() - 1, 2 * rng.uniform<double>() - 1);
         if (i % 5 == 0) p = Vec3d(std::floor(p.x) + 0.5, std::floor(p.y) + 0.5, p.z);  // grid-aligned rays
+        // The voxelized test (2-bit voxel, 4^3 sub-voxels of partial voxels, then the mesh).
+        const Vec3i64 t(std::int64_t(std::floor(p.x)), std::int64_t(std::floor(p.y)), std::int64_t(std::floor(p.z)));
+        const bool v_in = vb.point_inside(t, p - Vec3d(t));
         if (sure_inside(p)) {
             REQUIRE(mb.inside(p));
+            REQUIRE(v_in);
             ++tested;
         } else if (sure_outside(p)) {
             REQUIRE_FALSE(mb.inside(p));
+            REQUIRE_FALSE(v_in);
             ++tested;
         }
     }
     REQUIRE(tested > 4000);
+    REQUIRE(vb.refined());
+    REQUIRE(vb.refinement_bytes() == vb.partial_count() * 24);
 }
 
 TEST_CASE("voxelized boundary: bad input is a clear error", "[aggregates][voxel]") {

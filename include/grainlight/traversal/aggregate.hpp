@@ -175,12 +175,15 @@ public:
     /// Bounding-sphere radius R of the grains (world units).
     [[nodiscard]] double grain_radius() const noexcept { return tile().radius(); }
 
-    /// Bytes used: tile (centres + query grid, estimated) + 2-bit voxels + exemplar geometry.
-    /// Independent of the number of grains.
+    /// Bytes used: tile (centres + query grid, estimated) + 2-bit voxels (+ the sub-voxel
+    /// refinement of partial voxels and a mesh boundary's BVH) + exemplar geometry. Independent of
+    /// the number of grains (the boundary part grows with the shape's size in tiles).
     [[nodiscard]] std::size_t memory_bytes() const noexcept {
         const auto m = std::size_t(tile().grid_resolution());
         std::size_t b = tile().size() * sizeof(Vec3d) * 2 + m * m * m * sizeof(std::uint32_t) + tile().size() * 27 * 32;
         b += boundary().memory_bytes();
+        if constexpr (requires { boundary().refinement_bytes(); }) b += boundary().refinement_bytes();
+        if constexpr (requires { boundary().shape().memory_bytes(); }) b += boundary().shape().memory_bytes();
         for (const auto& e : exemplars_) b += e.memory_bytes();
         return b;
     }
