@@ -162,3 +162,61 @@ TEST_CASE("EPT render: low + high order is independent of k, images independent 
     REQUIRE(c.low.image().rgb == b.low.image().rgb);  // bit-identical for 1 and 2 threads
     REQUIRE(c.grain_rays == b.grain_rays);
 }
+
+TEST_CASE("EPT grain interactions reproduce the scatterometer's g and alpha_s", "[aggregates][ept]") {
+    // Two independent simulations of the same grain: the virtual scatterometer (one grain in its
+    // bounding sphere, precompute/scatterometer.hpp) and EPT photon walks in an infinite aggregate.
+    // Per interaction, E[w_i . w_o] = g and E[survival] = alpha_s (Meng15 Sec. 4.2.1) must agree.
+    const PeriodicTile tile = tile_f30(6);
+    struct Case {
+        GrainMaterial m;
+        GrainShape shape;
+    };
+    const Case cases[] = {{GrainMaterial::make_dielectric(1.5), GrainShape::sphere},
+                          {GrainMaterial::make_absorbing_dielectric(1.4, RGBd{0.3, 0.3, 0.3}, RGBd(1.0), 0.2), GrainShape::crystal}};
+    for (const auto& cs : cases) {
+        ScatterometerConfig cfg;
+        cfg.rays = 60000;
+        cfg.seed = 9;
+        const GrainStats st = run_scatterometer(ScatterometerGrain::procedural(cs.shape, 0.95, cs.m, 3, 3), cfg);
+        using B = EverywhereBoundary;
+        GranularAggregate<B> agg(tile, VoxelizedBoundary<B>({}, tile.side()),
+                                 {GrainExemplar::procedural(cs.shape, 0.95, cs.m, 3, 3)}, {1.0}, 11);
+        struct Cb {
+            double sum_cos = 0, sum_w = 0, sum_surv = 0, sum_surv2 = 0, sum_c2 = 0;
+            int n = 0;
+            bool on_interaction(const GrainInteraction& gi) {
+                ++n;
+                const double s = gi.survival[1];
+                sum_surv += s;
+                sum_surv2 += s * s;
+                if (!gi.absorbed) {
+                    const double c = glm::dot(gi.w_i, gi.w_o) * s;  // survival-weighted direction change
+                    sum_cos += c;
+                    sum_c2 += c * c;
+                    sum_w += s;
+                }
+                return n < 40;
+            }
+        } cb;
+        for (int i = 0; i < 4000; ++i) {
+            Rng rng = Rng::from_key(12, std::uint64_t(i), 0);
+            Vec3d p(0.0);
+            for (int k = 0; k < 100; ++k) {
+                p = tile.side() * Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>());
+                if (!tile.sphere_containing(p)) break;
+            }
+            RGB w(1.0f);
+            const int before = cb.n;
+            cb.n = 0;  // per-walk count for the stop rule (40 interactions per walk)
+            (void)ept_photon_walk(agg, p, sample_uniform_sphere(rng.uniform2<double>()), w, rng, cb);
+            cb.n += before;  // running total
+        }
+        const double alpha_ept = cb.sum_surv / cb.n;
+        const double g_ept = cb.sum_cos / cb.sum_w;
+        const double alpha_ref = st.alpha_s(1), g_ref = st.g(1);
+        INFO("n " << cb.n << " alpha EPT " << alpha_ept << " vs scatterometer " << alpha_ref << "; g EPT " << g_ept << " vs " << g_ref);
+        REQUIRE(alpha_ept == Approx(alpha_ref).margin(0.02));
+        REQUIRE(g_ept == Approx(g_ref).margin(0.03));
+    }
+}
