@@ -220,6 +220,10 @@ TEST_CASE("Spectrum arithmetic is component-wise", "[core][spectrum]") {
     CHECK(exp(RGB(0.f)) == RGB(1.f));
     CHECK(!a.is_black());
     CHECK(RGB(0.f).is_black());
+    // Brace-init with one value broadcasts (no initializer-list trap giving (x, 0, 0)).
+    const RGB braced{0.5f};
+    CHECK(braced == RGB(0.5f));
+    static_assert(!std::is_constructible_v<RGB, float, float>, "exactly N values or one broadcast value");
 }
 
 TEST_CASE("Errors name the parameter, value and range", "[core][errors]") {

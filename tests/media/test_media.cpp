@@ -83,6 +83,23 @@ TEST_CASE("Spectral sigma_t: free-flight estimator is unbiased per channel", "[m
     }
 }
 
+TEST_CASE("Grey RGB medium: escapes keep weight 1 in every channel", "[media][spectral]") {
+    // Regression: Interaction::weight once defaulted to (1, 0, 0) for RGB via brace-init.
+    CHECK(Interaction<float, RGB>{}.weight == RGB(1.f));
+    ContinuousMedium<IsotropicPhase<float, RGB>, RGB> m(RGB(1.f), RGB(0.5f), {});
+    auto rng = Pcg32::from_key(5);
+    const Ray<float> ray(Vec3f(0.f), Vec3f(0.f, 0.f, 1.f));
+    int escapes = 0;
+    for (int i = 0; i < 1000; ++i) {
+        auto it = m.sample_interaction(ray, 0.5f, rng);
+        if (it.is_escape()) {
+            ++escapes;
+            REQUIRE(it.weight == RGB(1.f));
+        }
+    }
+    CHECK(escapes > 0);
+}
+
 TEST_CASE("Transmittance is exp(-sigma_t t)", "[media]") {
     ContinuousMedium<IsotropicPhase<float, RGB>, RGB> m(RGB{0.f, 1.f, 3.f}, RGB(0.5f), {});
     Rng rng;

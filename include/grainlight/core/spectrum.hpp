@@ -25,11 +25,11 @@ struct Spectrum {
     constexpr Spectrum() noexcept = default;
     /// Every channel = v.
     constexpr explicit Spectrum(F v) noexcept { c.fill(v); }
-    constexpr Spectrum(std::initializer_list<F> values) noexcept {
-        std::size_t i = 0;
-        for (F v : values)
-            if (i < N) c[i++] = v;
-    }
+    /// One value per channel, exactly N of them: RGB{0.1f, 0.2f, 0.3f}. (No initializer-list
+    /// constructor: `S{x}` must mean "every channel = x", never "(x, 0, 0)".)
+    template <class... Ts>
+        requires(sizeof...(Ts) == N && N > 1 && (std::convertible_to<Ts, F> && ...))
+    constexpr Spectrum(Ts... values) noexcept : c{static_cast<F>(values)...} {}
 
     [[nodiscard]] constexpr F& operator[](std::size_t i) noexcept { return c[i]; }
     [[nodiscard]] constexpr F operator[](std::size_t i) const noexcept { return c[i]; }

@@ -41,7 +41,7 @@ struct Interaction {
     Vec3<F> p{F(0)};           ///< position of the event (may differ from ray(t): teleports)
     Vec3<F> w{F(0)};           ///< new direction if `has_direction`
     F direction_pdf = F(0);    ///< pdf of `w` (solid angle) if `has_direction`
-    S weight{F(1)};            ///< throughput multiplier
+    S weight = S(F(1));        ///< throughput multiplier
     bool has_direction = false;
     NeeKind nee = NeeKind::phase;
 
