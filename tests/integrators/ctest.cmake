@@ -16,16 +16,16 @@ if(TARGET slab OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/ex
   set_tests_properties(slab_unknown_argument PROPERTIES WILL_FAIL TRUE LABELS "example;integrators")
   # Index-matched, g = 0, a = 0.9, b = 1, mu0 = 1: Prahl AD R = 0.26741, T = 0.59163.
   add_test(NAME slab_json_index_matched
-           COMMAND ${CMAKE_COMMAND} -DSLAB=$<TARGET_FILE:slab>
+           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:slab>
                    "-DARGS=--albedo;0.9;--optical-depth;1;--g;0;--ior;1;--mu0;1;--paths;400000;--seed;5"
-                   -DR_REF=0.26741 -DT_REF=0.59163
-                   -P ${CMAKE_CURRENT_SOURCE_DIR}/integrators/check_slab_json.cmake)
+                   "-DCHECKS=abs(R - 0.26741) <= 3 * R_stderr + 0.002;abs(T - 0.59163) <= 3 * T_stderr + 0.002;paths == 400000"
+                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
   # n = 1.4, g = 0.8, a = 0.95, b = 1: Prahl AD R = 0.10840, T = 0.78517.
   add_test(NAME slab_json_refractive
-           COMMAND ${CMAKE_COMMAND} -DSLAB=$<TARGET_FILE:slab>
+           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:slab>
                    "-DARGS=--albedo;0.95;--optical-depth;1;--g;0.8;--ior;1.4;--mu0;1;--paths;400000;--seed;6"
-                   -DR_REF=0.10840 -DT_REF=0.78517
-                   -P ${CMAKE_CURRENT_SOURCE_DIR}/integrators/check_slab_json.cmake)
+                   "-DCHECKS=abs(R - 0.10840) <= 3 * R_stderr + 0.002;abs(T - 0.78517) <= 3 * T_stderr + 0.002"
+                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
   set_tests_properties(slab_json_index_matched slab_json_refractive PROPERTIES LABELS "example;integrators")
 endif()
 

@@ -13,17 +13,18 @@ if(TARGET packing OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}
   # Issue 4 acceptance: f = 0.63, N = 2000 reaches >= 0.62 without overlaps, and the mean outer
   # chord agrees with the exact 4R(1-f)/(3f) within 2 %; the written tile loads back.
   add_test(NAME packing_acceptance_063
-           COMMAND ${CMAKE_COMMAND} -DPACKING=$<TARGET_FILE:packing>
-                   "-DARGS=--fraction;0.63;--spheres;2000;--seed;1;--quality;quick"
-                   -DTILE=${CMAKE_CURRENT_BINARY_DIR}/packing_acceptance_063.gltile
-                   -DMIN_FRACTION=0.62 -DCHORD_TOL=0.02
-                   -P ${CMAKE_CURRENT_SOURCE_DIR}/packing/check_packing_json.cmake)
+           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:packing>
+                   "-DARGS=--fraction;0.63;--spheres;2000;--seed;1;--quality;quick;--out;${CMAKE_CURRENT_BINARY_DIR}/packing_acceptance_063.gltile"
+                   -DEXPECT_FILE=${CMAKE_CURRENT_BINARY_DIR}/packing_acceptance_063.gltile
+                   "-DCHECKS=fraction >= 0.62;min_center_distance_over_diameter >= 1;abs(mean_chord / dixmier_mean_chord - 1) <= 0.02;spheres == 2000"
+                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
   # A request above what the packer reaches at a fast growth rate: stops at jamming, reports
   # the rate achieved, still no overlaps.
   add_test(NAME packing_jammed_request
-           COMMAND ${CMAKE_COMMAND} -DPACKING=$<TARGET_FILE:packing>
+           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:packing>
                    "-DARGS=--fraction;0.639;--spheres;300;--seed;2;--growth-rate;1"
-                   -DMIN_FRACTION=0.5 -DCHORD_TOL=0.05 -DEXPECT_WARNING=jammed
-                   -P ${CMAKE_CURRENT_SOURCE_DIR}/packing/check_packing_json.cmake)
+                   -DEXPECT_STDERR=jammed
+                   "-DCHECKS=fraction >= 0.5;fraction < 0.639;min_center_distance_over_diameter >= 1;abs(mean_chord / dixmier_mean_chord - 1) <= 0.05"
+                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
   set_tests_properties(packing_acceptance_063 packing_jammed_request PROPERTIES LABELS "example;packing")
 endif()
