@@ -17,10 +17,10 @@ mkdir -p "$OUT"
 
 # Calculators take their own arguments; figure/table programs take the shared convention.
 declare -A ARGS=(
-  [slab]="--albedo 0.9 --optical-depth 2 --g 0 --ior 1.4 --mu0 1 --paths 200000 --seed 1"
-  [mie]="--n 1.33 --k 0 --x 100 --angles 0,30,60,90,120,150,180"
+  [slab]="--albedo 0.9 --optical-depth 2 --g 0 --ior 1.4 --mu0 1 --paths 1000000 --seed 1 --out $OUT/slab"
+  [mie]="--n 1.33 --k 0 --x 100 --angles 0,30,60,90,120,150,180 --out $OUT/mie"
   [packing]="--fraction 0.63 --spheres 2000 --seed 1 --out $OUT/packing/tile_f063_n2000.gltile"
-  [grain_stats]="--preset glass-bead --rays 200000 --seed 1"
+  [grain_stats]="--preset glass-bead --rays 200000 --seed 1 --out $OUT/grain_stats"
 )
 
 failed=()

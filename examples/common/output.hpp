@@ -39,7 +39,10 @@ public:
         return raw(key, os.str());
     }
     Json& raw(const std::string& key, const std::string& json_value) {
-        body_ += (body_.empty() ? "" : ",") + quote(key) + ":" + json_value;
+        if (!body_.empty()) body_ += ',';
+        body_ += quote(key);
+        body_ += ':';
+        body_ += json_value;
         return *this;
     }
     [[nodiscard]] std::string str() const { return "{" + body_ + "}"; }
