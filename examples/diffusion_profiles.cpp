@@ -88,46 +88,8 @@ RadialTally run_block(const SceneT& scene, double sigma_t_prime, std::uint64_t f
     return tally;
 }
 
-// Exact R(mu0 = 1) of the isotropic half-space, 1 - H(1) sqrt(1 - a) (Chandrasekhar 1960 ch. V),
-// H by fixed-point iteration on 200 Gauss-Legendre nodes.
-double exact_halfspace(double a) {
-    const int n = 200;
-    std::vector<double> x, w;
-    for (int i = 1; i <= n; ++i) {
-        double z = std::cos(M_PI * (i - 0.25) / (n + 0.5)), dp = 1;
-        for (int it = 0; it < 100; ++it) {
-            double p0 = 1, p1 = z;
-            for (int k = 2; k <= n; ++k) {
-                const double p2 = ((2 * k - 1) * z * p1 - (k - 1) * p0) / k;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n * (z * p1 - p0) / (z * z - 1);
-            const double dz = p1 / dp;
-            z -= dz;
-            if (std::abs(dz) < 1e-15) break;
-        }
-        x.push_back(0.5 * (1 - z));
-        w.push_back(1.0 / ((1 - z * z) * dp * dp));
-    }
-    const double s = std::sqrt(1 - a);
-    std::vector<double> h(x.size(), 1.0), nh(h.size());
-    auto eval = [&](double mu) {
-        double acc = 0;
-        for (std::size_t j = 0; j < h.size(); ++j) acc += w[j] * x[j] * h[j] / (mu + x[j]);
-        return 1.0 / (s + 0.5 * a * acc);
-    };
-    for (int it = 0; it < 100000; ++it) {
-        double change = 0;
-        for (std::size_t i = 0; i < h.size(); ++i) {
-            nh[i] = eval(x[i]);
-            change = std::max(change, std::abs(nh[i] - h[i]));
-        }
-        h.swap(nh);
-        if (change < 1e-12) break;
-    }
-    return 1 - eval(1.0) * s;
-}
+// Exact R(mu0 = 1) of the isotropic half-space, 1 - H(1) sqrt(1 - a) (Chandrasekhar 1960 ch. V).
+double exact_halfspace(double a) { return grainlight::IsotropicHFunction(a, 200).reflectance(1.0); }
 
 }  // namespace
 

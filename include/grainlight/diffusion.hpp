@@ -6,5 +6,6 @@
 
 #include "grainlight/diffusion/boundary.hpp"
 #include "grainlight/diffusion/dipole.hpp"
+#include "grainlight/diffusion/h_function.hpp"
 #include "grainlight/diffusion/improved.hpp"
 #include "grainlight/diffusion/multipole.hpp"

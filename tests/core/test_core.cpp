@@ -8,6 +8,7 @@
 #include "grainlight/core/distribution.hpp"
 #include "grainlight/core/error.hpp"
 #include "grainlight/core/frame.hpp"
+#include "grainlight/core/quadrature.hpp"
 #include "grainlight/core/ray.hpp"
 #include "grainlight/core/rng.hpp"
 #include "grainlight/core/spectrum.hpp"
@@ -238,4 +239,21 @@ TEST_CASE("Errors name the parameter, value and range", "[core][errors]") {
         CHECK(m.find("[0, 1]") != std::string::npos);
     }
     CHECK_THROWS_AS(check_finite("X", "y", std::nan("")), grainlight::invalid_argument);
+}
+
+TEST_CASE("Gauss-Legendre rules integrate polynomials of degree 2n-1 exactly", "[core][quadrature]") {
+    for (int n : {1, 2, 5, 16, 64}) {
+        INFO("n = " << n);
+        const auto r = gauss_legendre(n, -1.0, 1.0);
+        CHECK(r.integrate([](double) { return 1.0; }) == Approx(2.0).epsilon(1e-14));
+        for (int k = 0; k <= 2 * n - 1; ++k) {
+            const double exact = (k % 2) ? 0.0 : 2.0 / (k + 1);
+            CHECK(r.integrate([&](double x) { return std::pow(x, k); }) == Approx(exact).margin(1e-13));
+        }
+        for (std::size_t i = 1; i < r.x.size(); ++i) CHECK(r.x[i] > r.x[i - 1]);
+    }
+    const auto r01 = gauss_legendre(7, 0.0, 3.0);
+    CHECK(r01.integrate([](double x) { return x * x; }) == Approx(9.0).epsilon(1e-13));
+    CHECK_THROWS_AS(gauss_legendre(0), grainlight::invalid_argument);
+    CHECK_THROWS_AS(gauss_legendre(4, 1.0, 1.0), grainlight::invalid_argument);
 }

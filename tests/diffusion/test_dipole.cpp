@@ -4,7 +4,7 @@
 //    would fail it);
 //  - dimensional analysis: scaling every coefficient by k gives R_k(r) = k^2 R(k r);
 //  - the exact half-space albedo R(mu0 = 1) = 1 - H(1) sqrt(1 - a) (Chandrasekhar 1960, ch. V),
-//    solved in h_function.hpp and checked against shared/reference/halfspace_albedo.md. The
+//    solved by grainlight/diffusion/h_function.hpp and checked against shared/reference/halfspace_albedo.md. The
 //    dipole is a high-albedo model (pitfalls.md): ~24 % low at a = 0.5, within 0.1 % at 0.999;
 //    the test checks that band and that the error shrinks monotonically as a -> 1;
 //  - energy conservation at alpha' = 1 (R_d = 1).
@@ -13,7 +13,7 @@
 #include <cmath>
 #include <string>
 
-#include "diffusion/h_function.hpp"
+#include "grainlight/diffusion/h_function.hpp"
 #include "grainlight/diffusion/dipole.hpp"
 
 using namespace grainlight;
@@ -60,14 +60,14 @@ TEST_CASE("Dipole conserves energy without absorption", "[diffusion][dipole]") {
 
 TEST_CASE("Exact half-space solver reproduces the tabulated H-function values", "[diffusion][dipole]") {
     // shared/reference/halfspace_albedo.md (400-node fixed point, converged to 1e-12)
-    CHECK(diffusion_test::halfspace_reflectance(0.5) == Approx(0.115226).margin(2e-6));
-    CHECK(diffusion_test::halfspace_reflectance(0.8) == Approx(0.285255).margin(2e-6));
+    CHECK(grainlight::IsotropicHFunction(0.5).reflectance(1.0) == Approx(0.115226).margin(2e-6));
+    CHECK(grainlight::IsotropicHFunction(0.8).reflectance(1.0) == Approx(0.285255).margin(2e-6));
 }
 
 TEST_CASE("Dipole total vs the exact half-space albedo: error shrinks as alpha' -> 1", "[diffusion][dipole]") {
     double prev = 1e9;
     for (double a : {0.5, 0.8, 0.9, 0.99, 0.999}) {
-        const double exact = diffusion_test::halfspace_reflectance(a);
+        const double exact = grainlight::IsotropicHFunction(a).reflectance(1.0);
         const double rel = ClassicalDipole<double>(a, 1 - a).total_reflectance() / exact - 1;
         INFO("alpha' = " << a << ": exact " << exact << ", relative error " << rel);
         CHECK(rel < 0);  // the dipole underestimates at every albedo here

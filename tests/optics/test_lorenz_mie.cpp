@@ -1,6 +1,8 @@
 // Tests of optics/lorenz_mie.hpp against published values and physical laws.
 #include <catch2/catch.hpp>
 
+#include "grainlight/core/quadrature.hpp"
+
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -82,30 +84,6 @@ double deg2mu(double deg) {
     if (deg == 0) return 1;
     if (deg == 180) return -1;
     return std::cos(deg * 3.14159265358979323846 / 180);
-}
-
-// Gauss-Legendre nodes/weights on [-1, 1] (Newton on P_n); an independent quadrature for the
-// integral forms of Qsca and g.
-void gauss_legendre(int n, std::vector<double>& x, std::vector<double>& w) {
-    x.resize(n);
-    w.resize(n);
-    for (int i = 0; i < n; ++i) {
-        double z = std::cos(3.14159265358979323846 * (i + 0.75) / (n + 0.5)), dp = 0;
-        for (int it = 0; it < 100; ++it) {
-            double p0 = 1, p1 = z;
-            for (int k = 2; k <= n; ++k) {
-                const double p2 = ((2 * k - 1) * z * p1 - (k - 1) * p0) / k;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n * (z * p1 - p0) / (z * z - 1);
-            const double dz = p1 / dp;
-            z -= dz;
-            if (std::abs(dz) < 1e-16) break;
-        }
-        x[i] = z;
-        w[i] = 2 / ((1 - z * z) * dp * dp);
-    }
 }
 
 }  // namespace
@@ -209,7 +187,9 @@ TEST_CASE("Lorenz-Mie: Qext -> 2 for large x, energy, integral forms", "[optics]
     // quadrature of the amplitudes checks the series sums for Qsca and g independently.
     std::vector<double> mu, w;
     for (auto [m, x] : {std::pair{C(1.5, 0.0), 10.0}, std::pair{C(1.33, 0.01), 30.0}, std::pair{C(0.75, 0.0), 5.0}}) {
-        gauss_legendre(400, mu, w);
+        const auto rule = grainlight::gauss_legendre(400);
+        mu = rule.x;
+        w = rule.w;
         const LorenzMie mie(m, x);
         double sca = 0, gs = 0;
         for (std::size_t i = 0; i < mu.size(); ++i) {
