@@ -1,0 +1,814 @@
+/// @file grainlight/integrators/hybrid.hpp
+/// Meng15 Sec. 5: the hybrid integrator that starts camera paths with explicit path tracing of
+/// the grains (EPT, integrators/ept.hpp), switches them to volumetric path tracing (VPT) in the
+/// effective continuous medium of the scatterometer statistics (media/teleportation.hpp,
+/// make_effective_medium) once the rays of a pixel's bundle have become incoherent, and from VPT
+/// to diffusion (DA: improved diffusion, diffusion/improved.hpp) deep inside the medium.
+///
+/// Pieces (equation -> function):
+///   - Bundles traced in lock-step, Eq. 5: `hybrid_bundle` spawns N paths of one pixel (N = 16
+///     in the paper, HybridOptions::bundle_size) and advances them one EPT event at a time. After
+///     every round k it computes sigma_k = sqrt(1/N_k sum_i |x_i^k - mean|^2) over the N_k paths
+///     still alive in EPT mode (their current vertices) and arms the bundle when
+///     sigma_k > tau N_k / N (tau = HybridOptions::tau grain radii; 4 in the paper) or when one
+///     path remains. An armed path switches at its next grain hit ("all paths in a bundle switch
+///     upon hitting the next grain"), after at least `min_ept_interactions` grain interactions in
+///     EPT (Meng15 Sec. 6: "at least one grain interaction in EPT mode before switching"), and
+///     only where the grain hit lies inside the aggregate's boundary shape (where the effective
+///     medium is).
+///   - The switch replaces that grain interaction by a scattering event of the effective medium
+///     (albedo alpha_s, phase Phi), with next-event estimation, and continues with the VPT of
+///     integrators/vpt.hpp in `scene_vpt`: the same lights and surfaces as the EPT scene plus the
+///     aggregate's boundary shape as an index-matched surface enclosing the effective medium.
+///   - Acceptance P_a (Sec. 5): at the switch the path survives with probability P_a (weight
+///     1 / P_a). `optimal_acceptance` is Eq. 8, the minimiser of Eq. 6 x Eq. 7;
+///     `estimate_optimal_acceptance` measures V_L, V_H, t_L, t_H on a preview (every stride-th
+///     pixel of the camera, same samples per pixel and pixel footprint, P_a = 1: Meng15's "down-
+///     scaled image 1% of the original size ... footprint of the original pixels").
+///   - VPT -> DA (Sec. 5, App. A): at a VPT scattering vertex x with distance to the boundary
+///     >= d_DA = min(1 / sigma_t', 0.5 / sigma_tr) (the largest over the colour channels), the
+///     path samples a uniform direction from x, finds the boundary point x_s (normal N_s), and
+///     moves there with the weight of the semi-infinite improved-diffusion point-source profile
+///     R_p(r; z) (z, r: depth of x below and offset along the tangent plane of x_s) divided by the
+///     area pdf of x_s, i.e. 4 pi |x_s - x|^2 / |cos theta_s|. At x_s it gathers the incident
+///     radiance like a white Lambertian vertex (NEE with MIS, then a cosine-sampled direction out
+///     of the medium): Meng15 "sample the direct illumination at x_i ... we resume VPT from x_i".
+///     Why R_p: by reciprocity the mean radiance phi / 4 pi at x due to irradiance E on the
+///     boundary is (1 / pi) int E(x_s) R_p(x_s; x) dA (checked by the furnace: E = pi L gives L
+///     when int R_p dA = 1).
+///   - Time to unit variance (Sec. 6): `render_hybrid` records per pixel the sample variance of
+///     the bundle estimates (total, low-order = EPT part, high-order = VPT/DA part) and the CPU
+///     time of the two parts; ttuv = (mean pixel variance of one bundle sample) x (CPU seconds per
+///     bundle sample per pixel).
+///
+/// Mode `HybridMode::ept` evaluates the same criterion but never switches: contributions after
+/// the would-be switch go to the high-order image, and every path is bit-identical to
+/// ept_radiance with the same generator (each path of a bundle has its own counter-based
+/// generator Pcg32::from_key(seed, pixel, bundle * N + i), as render_ept's sample index).
+///
+/// Distance to the boundary: any callable double(const Vec3d&) returning the distance (or a
+/// lower bound) from an interior point to the boundary surface; `BoundaryDistance<Shape>`
+/// provides it for SphereBoundary, BoxBoundary and the half-space used in tests.
+///
+/// Kernel rules: no allocation, no exceptions, no virtual calls; randomness only from the paths'
+/// generators. The clock is read only when HybridOptions::measure_time is set.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "grainlight/core/error.hpp"
+#include "grainlight/core/frame.hpp"
+#include "grainlight/core/math.hpp"
+#include "grainlight/core/ray.hpp"
+#include "grainlight/core/rng.hpp"
+#include "grainlight/core/statistics.hpp"
+#include "grainlight/core/warp.hpp"
+#include "grainlight/diffusion/improved.hpp"
+#include "grainlight/integrators/ept.hpp"
+#include "grainlight/integrators/render.hpp"
+#include "grainlight/integrators/vpt.hpp"
+#include "grainlight/integrators/walk.hpp"
+#include "grainlight/media/teleportation.hpp"
+#include "grainlight/scene/concepts.hpp"
+#include "grainlight/scene/film.hpp"
+#include "grainlight/traversal/aggregate.hpp"
+
+#if defined(_OPENMP)
+#include <omp.h>
+#endif
+
+namespace grainlight {
+
+// ---------------------------------------------------------------------------------------------
+// Distance to the boundary (VPT -> DA criterion)
+// ---------------------------------------------------------------------------------------------
+
+/// Distance from p to the surface of a solid sphere (meaningful for interior points; negative
+/// outside).
+[[nodiscard]] inline double distance_to_boundary(const SphereBoundary& s, const Vec3d& p) noexcept {
+    return s.radius - glm::length(p - s.center);
+}
+/// Distance from p to the surface of a solid axis-aligned box (interior points; <= 0 outside).
+[[nodiscard]] inline double distance_to_boundary(const BoxBoundary& b, const Vec3d& p) noexcept {
+    double d = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < 3; ++a) d = std::min({d, p[a] - b.lo[a], b.hi[a] - p[a]});
+    return d;
+}
+
+/// The half-space z < z0 (tests: Meng15 App. A's planar assumption holds exactly).
+struct HalfSpaceBoundary {
+    double z0 = 0;
+};
+/// Distance from p to the plane z = z0 of a half-space z < z0.
+[[nodiscard]] inline double distance_to_boundary(const HalfSpaceBoundary& h, const Vec3d& p) noexcept {
+    return h.z0 - p.z;
+}
+
+/// Callable distance-to-boundary for a shape with a `distance_to_boundary` overload.
+template <class Shape>
+struct BoundaryDistance {
+    Shape shape;
+    [[nodiscard]] double operator()(const Vec3d& p) const noexcept { return distance_to_boundary(shape, p); }
+};
+
+/// A distance that is never large enough (disables the DA switch).
+struct NoBoundaryDistance {
+    [[nodiscard]] double operator()(const Vec3d&) const noexcept { return 0.0; }
+};
+
+// ---------------------------------------------------------------------------------------------
+// Options, diffusion parameters, Eq. 8
+// ---------------------------------------------------------------------------------------------
+
+/// Which techniques a hybrid render uses.
+enum class HybridMode : std::uint8_t {
+    ept,         ///< EPT only (the criterion only splits low/high order)
+    ept_vpt,     ///< EPT -> VPT
+    ept_vpt_da   ///< EPT -> VPT -> DA
+};
+
+/// Options of the hybrid integrator (defaults: Meng15 Sec. 5).
+struct HybridOptions {
+    HybridMode mode = HybridMode::ept_vpt;
+    int bundle_size = 16;           ///< N: paths per bundle (1..64)
+    double tau = 4.0;               ///< Eq. 5 threshold in grain (bounding-sphere) radii
+    int min_ept_interactions = 1;   ///< grain interactions in EPT before a path may switch
+    bool switch_single = true;      ///< arm the bundle when only one path remains
+    double acceptance = 1.0;        ///< P_a in (0, 1]
+    EptOptions ept{};               ///< EPT part (events budget, roulette, NEE)
+    VptOptions vpt{};               ///< VPT part (depth, roulette, NEE)
+    int max_da_restarts = 64;       ///< DA connections per path at most
+    bool measure_time = false;      ///< time the EPT and VPT/DA parts (for P_a and ttuv)
+
+    /// Throws grainlight::invalid_argument for out-of-range fields.
+    void validate(const char* where) const {
+        check_argument(bundle_size >= 1 && bundle_size <= 64, where, "bundle_size", bundle_size, "[1, 64]");
+        check_argument(tau > 0.0, where, "tau", tau, "(0, inf] (grain radii)");
+        check_argument(min_ept_interactions >= 0, where, "min_ept_interactions", min_ept_interactions, ">= 0");
+        check_argument(acceptance > 0.0 && acceptance <= 1.0, where, "acceptance", acceptance, "(0, 1]");
+        check_argument(max_da_restarts >= 0, where, "max_da_restarts", max_da_restarts, ">= 0");
+    }
+};
+
+/// Per-channel improved diffusion of the effective medium (index-matched boundary, Meng15 App.
+/// A: eta = 1) and the switch distance d_DA.
+struct HybridDiffusion {
+    std::array<ImprovedDiffusion<double>, 3> channel;
+    double d_DA = 0;  ///< max over channels of min(1 / sigma_t', 0.5 / sigma_tr)
+};
+
+/// Diffusion parameters from the effective RTE parameters (Sec. 4.2.3: sigma_s' = (1 - g)
+/// alpha_s sigma_t, sigma_a = (1 - alpha_s) sigma_t), eta = 1.
+[[nodiscard]] inline HybridDiffusion make_hybrid_diffusion(const EffectiveRteParams& p) {
+    auto make = [&](int c) { return ImprovedDiffusion<double>(p.sigma_s_reduced[c], p.sigma_a[c], 1.0); };
+    HybridDiffusion h{{make(0), make(1), make(2)}, 0.0};
+    for (const auto& d : h.channel) h.d_DA = std::max(h.d_DA, d.switch_distance());
+    return h;
+}
+
+/// Meng15 Eq. 8: the acceptance probability minimising the time to unit variance
+/// (V_L + V_H / P_a)(t_L + P_a t_H) of Eqs. 6-7: P_a = sqrt(V_H t_L / (V_L t_H)), clamped to
+/// [p_min, 1]. V_L, V_H: variances of one sample's low- and high-order parts (at P_a = 1);
+/// t_L, t_H: their costs (any common unit). Degenerate inputs (V_L = 0 or t_H = 0) give 1.
+[[nodiscard]] inline double optimal_acceptance(double V_L, double V_H, double t_L, double t_H,
+                                               double p_min = 1.0 / 64.0) noexcept {
+    if (!(V_L > 0.0) || !(t_H > 0.0)) return 1.0;
+    const double p = std::sqrt(std::max(0.0, V_H) * std::max(0.0, t_L) / (V_L * t_H));
+    if (!std::isfinite(p)) return 1.0;
+    return std::clamp(p, p_min, 1.0);
+}
+
+/// Eqs. 6-7: predicted time to unit variance (V_L + V_H / P_a)(t_L + P_a t_H).
+[[nodiscard]] inline double predicted_ttuv(double V_L, double V_H, double t_L, double t_H, double P_a) noexcept {
+    return (V_L + V_H / P_a) * (t_L + P_a * t_H);
+}
+
+/// What the hybrid needs to know about the VPT scene: the index of the effective medium, the
+/// index of the aggregate's boundary shape (an index-matched surface enclosing that medium), the
+/// distance-to-boundary callable and the diffusion model (ept_vpt_da only).
+template <class Distance>
+struct HybridContext {
+    int medium = 0;                         ///< effective medium index in scene_vpt
+    int boundary_shape = 0;                 ///< shape index of the aggregate boundary in scene_vpt
+    Distance distance{};                    ///< distance to the boundary (VPT -> DA)
+    const HybridDiffusion* diffusion = nullptr;  ///< required for HybridMode::ept_vpt_da
+};
+
+/// Counters of a path / bundle.
+struct HybridCounters {
+    std::uint64_t paths = 0;         ///< camera paths
+    std::uint64_t switched = 0;      ///< paths that switched EPT -> VPT (accepted)
+    std::uint64_t rejected = 0;      ///< paths pruned by the P_a roulette at the switch
+    std::uint64_t switch_depth = 0;  ///< sum of grain interactions in EPT before the switch
+    std::uint64_t da = 0;            ///< DA connections
+    std::uint64_t grain_rays = 0;    ///< Algorithm 1 traversals
+    void merge(const HybridCounters& o) noexcept {
+        paths += o.paths;
+        switched += o.switched;
+        rejected += o.rejected;
+        switch_depth += o.switch_depth;
+        da += o.da;
+        grain_rays += o.grain_rays;
+    }
+};
+
+// ---------------------------------------------------------------------------------------------
+// VPT (+ DA) continuation after the switch
+// ---------------------------------------------------------------------------------------------
+
+namespace detail {
+
+/// VPT callbacks plus the DA switch at scattering vertices.
+template <LitScene Scene, class Distance>
+struct HybridVptCallbacks {
+    using F = typename Scene::Float;
+    using S = typename Scene::Spectrum;
+    VptCallbacks<Scene> vpt;
+    const HybridContext<Distance>& ctx;
+    bool da_enabled = false;
+    bool da_pending = false;
+    Vec3d da_x{0.0};
+
+    bool on_surface(PathState<F, S>& st, const SurfaceHit<F, S>& hit) noexcept { return vpt.on_surface(st, hit); }
+    void on_escape(const PathState<F, S>& st) noexcept { vpt.on_escape(st); }
+    template <class M>
+    bool on_scatter(PathState<F, S>& st, const Interaction<F, S>& it, const M& m) noexcept {
+        if (da_enabled && st.medium == ctx.medium) {
+            const Vec3d x(it.p);
+            if (ctx.distance(x) >= ctx.diffusion->d_DA) {
+                da_pending = true;
+                da_x = x;
+                return false;
+            }
+        }
+        return vpt.on_scatter(st, it, m);
+    }
+};
+
+}  // namespace detail
+
+/// One DA connection from the interior point x (Meng15 App. A, semi-infinite improved
+/// diffusion): a uniform direction from x to the boundary point x_s (which must be the boundary
+/// shape `ctx.boundary_shape` of `scene`), weight R_p(r; z) 4 pi |x_s - x|^2 / |cos theta_s| per
+/// channel. On success returns true and fills `hit` (x_s, outward normal) and `weight`.
+template <LitScene Scene, class Distance>
+[[nodiscard]] bool sample_diffusion_connection(const Scene& scene, const HybridContext<Distance>& ctx, const Vec3d& x,
+                                               Rng& rng, SurfaceHit<typename Scene::Float, typename Scene::Spectrum>& hit,
+                                               typename Scene::Spectrum& weight) noexcept {
+    using F = typename Scene::Float;
+    using S = typename Scene::Spectrum;
+    const Vec3d w = sample_uniform_sphere(rng.uniform2<double>());
+    hit = scene.intersect(Ray<F>(Vec3<F>(x), Vec3<F>(w)));
+    if (!hit.hit() || hit.shape != ctx.boundary_shape) return false;
+    const Vec3d n = glm::normalize(Vec3d(hit.n));
+    const double c = glm::dot(w, n);
+    if (!(c > 1e-6)) return false;  // must leave through the boundary from inside
+    const double dist = double(hit.t);
+    const double z = dist * c;  // depth of x below the tangent plane of x_s
+    const double r = std::sqrt(std::max(0.0, dist * dist - z * z));
+    const double inv_pdf_area = 4.0 * pi_v<double> * dist * dist / c;
+    weight = S(F(0));
+    for (std::size_t ch = 0; ch < S::size; ++ch) {
+        const auto& d = ctx.diffusion->channel[std::min<std::size_t>(ch, 2)];
+        weight[ch] = F(d.point_R(r, z) * inv_pdf_area);
+    }
+    return true;
+}
+
+/// The high-order part of a path after the switch: from the grain hit x (direction of arrival d,
+/// throughput beta) in the effective medium `ctx.medium` of `scene_vpt`: the grain interaction
+/// becomes a scattering event of the effective medium (albedo, NEE, phase sampling), then VPT,
+/// and (HybridMode::ept_vpt_da) DA connections deep inside. Returns the radiance; counts DA
+/// connections in `counters`.
+template <LitScene Scene, class Distance>
+    requires PhaseMedium<typename Scene::Medium>
+[[nodiscard]] typename Scene::Spectrum hybrid_vpt_continuation(const Scene& scene_vpt, const HybridContext<Distance>& ctx,
+                                                               const Vec3d& x, const Vec3d& d,
+                                                               const typename Scene::Spectrum& beta, Rng& rng,
+                                                               const HybridOptions& opt,
+                                                               HybridCounters* counters = nullptr) noexcept {
+    using F = typename Scene::Float;
+    using S = typename Scene::Spectrum;
+    using M = typename Scene::Medium;
+    constexpr F inf = std::numeric_limits<F>::infinity();
+    const M& m = scene_vpt.medium(ctx.medium);
+    detail::HybridVptCallbacks<Scene, Distance> cb{VptCallbacks<Scene>{scene_vpt, rng, opt.vpt}, ctx};
+    cb.da_enabled = opt.mode == HybridMode::ept_vpt_da && ctx.diffusion != nullptr;
+    WalkOptions<F> wopt;
+    wopt.max_depth = opt.vpt.max_depth;
+    wopt.rr_depth = opt.vpt.rr_depth;
+    wopt.mode = TransportMode::radiance;
+
+    PathState<F, S> st = start_path<F, S>(Ray<F>(Vec3<F>(x), Vec3<F>(d)), ctx.medium, beta);
+    if constexpr (requires { m.albedo(); }) st.throughput *= m.albedo();
+    Interaction<F, S> it;
+    it.kind = EventKind::scatter;
+    it.p = Vec3<F>(x);
+    it.nee = NeeKind::phase;
+    st.depth = 1;
+    bool walk_on = true;
+    if (cb.da_enabled && ctx.distance(x) >= ctx.diffusion->d_DA) {  // test in double precision
+        cb.da_pending = true;
+        cb.da_x = x;
+        walk_on = false;
+    } else {
+        walk_on = cb.on_scatter(st, it, m);
+    }
+    if (walk_on) {
+        const auto ps = m.phase().sample(Vec3<F>(d), rng.uniform2<F>());
+        if (!ps) return cb.vpt.L;
+        st.throughput *= ps.weight;
+        st.ray = Ray<F>(Vec3<F>(x), ps.w, inf, st.ray.cone);
+        st.specular = false;
+        st.last_pdf = ps.pdf;
+        st.last_p = Vec3<F>(x);
+    }
+    for (int restarts = 0;; ++restarts) {
+        if (walk_on) {
+            const WalkEnd e = walk(scene_vpt, st, rng, cb, wopt);
+            if (e != WalkEnd::stopped || !cb.da_pending) break;
+        }
+        walk_on = true;
+        if (!cb.da_pending || restarts >= opt.max_da_restarts) break;
+        cb.da_pending = false;
+        if (counters) ++counters->da;
+        // DA: move to a boundary point with the diffusion weight, gather there as a white
+        // Lambertian vertex (NEE + MIS), leave the medium along a cosine-sampled direction.
+        SurfaceHit<F, S> h;
+        S w;
+        if (!sample_diffusion_connection(scene_vpt, ctx, cb.da_x, rng, h, w)) break;
+        st.throughput *= w;
+        if (st.throughput.is_black()) break;
+        const Vec3<F> n = glm::normalize(h.n);
+        SurfaceHit<F, S> lam = h;
+        lam.type = SurfaceType::diffuse;
+        lam.reflectance = S(F(1));
+        lam.light = -1;
+        st.ray = Ray<F>(Vec3<F>(cb.da_x), -n, inf, st.ray.cone);  // arriving from inside: faces n
+        st.medium = h.medium_outside;                               // NEE leaves the medium
+        (void)cb.vpt.on_surface(st, lam);
+        const Vec3<F> local = sample_cosine_hemisphere(rng.uniform2<F>());
+        const Vec3<F> wo = glm::normalize(Frame<F>(n).to_world(local));
+        st.ray = Ray<F>(offset_ray_origin(h.p, n, wo), wo, inf, st.ray.cone);
+        st.medium = h.medium_outside;
+        st.specular = false;
+        st.last_pdf = cosine_hemisphere_pdf(local.z);
+        st.last_p = h.p;
+        if (++st.depth > wopt.max_depth) break;
+    }
+    return cb.vpt.L;
+}
+
+/// Radiance (mean over directions, as seen by a scattering vertex) at an interior point x
+/// estimated by one DA connection: the quantity the VPT -> DA switch adds at a vertex of
+/// throughput 1 (tests: deep inside a half-space under a constant sky it is
+/// L_sky int R_p dA = L_sky ImprovedDiffusion::point_total(z)).
+template <LitScene Scene, class Distance>
+    requires PhaseMedium<typename Scene::Medium>
+[[nodiscard]] typename Scene::Spectrum diffusion_radiance(const Scene& scene_vpt, const HybridContext<Distance>& ctx,
+                                                          const Vec3d& x, Rng& rng, const VptOptions& vopt = {}) noexcept {
+    using S = typename Scene::Spectrum;
+    using F = typename Scene::Float;
+    HybridOptions opt;
+    opt.mode = HybridMode::ept_vpt_da;
+    opt.vpt = vopt;
+    // A continuation whose first vertex is x with unit weight: undo the albedo of the first event.
+    S beta(F(1));
+    const auto& m = scene_vpt.medium(ctx.medium);
+    if constexpr (requires { m.albedo(); })
+        for (std::size_t c = 0; c < S::size; ++c) beta[c] = m.albedo()[c] > F(0) ? F(1) / m.albedo()[c] : F(0);
+    if (!(ctx.diffusion && ctx.distance(x) >= ctx.diffusion->d_DA)) return S(F(0));
+    return hybrid_vpt_continuation(scene_vpt, ctx, x, Vec3d(0, 0, 1), beta, rng, opt);
+}
+
+// ---------------------------------------------------------------------------------------------
+// EPT in lock-step bundles (Eq. 5)
+// ---------------------------------------------------------------------------------------------
+
+/// Radiance of one camera path of a hybrid bundle: the EPT part (low order) and the part after
+/// the (possibly virtual) switch (high order).
+template <class S>
+struct HybridPathRadiance {
+    S low{0.0f};
+    S high{0.0f};
+    bool switched = false;  ///< switched (or, in mode ept, reached the would-be switch)
+    int switch_order = 0;   ///< grain interactions in EPT before the switch
+};
+
+/// A bundle's result: per-path radiances and the CPU seconds of the two parts.
+template <class S, int NMax = 64>
+struct HybridBundleResult {
+    std::array<HybridPathRadiance<S>, NMax> path{};
+    int n = 0;
+    double seconds_low = 0, seconds_high = 0;
+    HybridCounters counters{};
+    /// Mean over the bundle's paths of the low / high / total radiance.
+    [[nodiscard]] S mean_low() const noexcept {
+        S s(0.0f);
+        for (int i = 0; i < n; ++i) s += path[std::size_t(i)].low;
+        return s / float(n);
+    }
+    [[nodiscard]] S mean_high() const noexcept {
+        S s(0.0f);
+        for (int i = 0; i < n; ++i) s += path[std::size_t(i)].high;
+        return s / float(n);
+    }
+};
+
+namespace detail {
+
+/// State of one EPT path of a bundle (the variables of ept_radiance's loop).
+template <class S>
+struct HybridEptPath {
+    Vec3d p{0.0}, d{0.0, 0.0, 1.0};
+    S beta{1.0f};
+    bool specular = true;
+    double last_pdf = 0;
+    Vec3d last_p{0.0};
+    int order = 0, events = 0;
+    bool have_last_grain = false;
+    AggregateGrain last_grain{};
+    bool alive = true;
+    bool high = false;  ///< contributions go to the high-order part (after the switch)
+};
+
+/// One iteration of ept_radiance's loop for path `ps` (identical random-number consumption).
+/// Returns 0: continue, 1: path finished, 2: switch at the grain hit `x_switch` (not yet
+/// consumed: the caller continues with VPT from there).
+template <LitScene Scene, BoundaryShape Shape>
+int hybrid_ept_step(const Scene& scene, const GranularAggregate<Shape>& agg, HybridEptPath<typename Scene::Spectrum>& ps,
+                    HybridPathRadiance<typename Scene::Spectrum>& out, Rng& rng, const HybridOptions& hopt, bool armed,
+                    std::uint64_t& grain_rays, Vec3d& x_switch) noexcept {
+    using F = typename Scene::Float;
+    using S = typename Scene::Spectrum;
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    const EptOptions& opt = hopt.ept;
+    if (ps.events >= opt.max_events) return 1;
+    const double R = agg.grain_radius();
+    Vec3d& p = ps.p;
+    Vec3d& d = ps.d;
+    S& beta = ps.beta;
+
+    auto add = [&](const S& L) {
+        if (ps.high)
+            out.high += L;
+        else
+            out.low += L;
+    };
+    auto mis_emission = [&](const S& Le, const SurfaceHit<F, S>& hit) {
+        if (Le.is_black()) return;
+        double w = 1;
+        if (opt.nee && !ps.specular) {
+            const double pl = double(scene.light_pdf(Vec3<F>(ps.last_p), Vec3<F>(d), hit));
+            w = power_heuristic(ps.last_pdf, pl);
+        }
+        add(beta * Le * F(w));
+    };
+    auto nee_diffuse = [&](const Vec3d& x, const Vec3d& nf, const S& rho, const S& thr) {
+        if (!opt.nee) return;
+        const Vec3<F> u(rng.uniform<F>(), rng.uniform<F>(), rng.uniform<F>());
+        const Vec3d origin = x + detail::grain_surface_epsilon(R) * nf;
+        const LightSample<F, S> ls = scene.sample_light(Vec3<F>(origin), u);
+        if (!ls || ls.L.is_black()) return;
+        const Vec3d w(ls.w);
+        const double c = glm::dot(w, nf);
+        if (c <= 0) return;
+        const double dist = std::isinf(double(ls.dist)) ? inf : double(ls.dist) * (1 - 1e-4);
+        ++grain_rays;
+        if (agg.occluded(origin, w, 0.0, std::isinf(dist) ? 1e30 : dist)) return;
+        const S tr = shadow_transmittance(scene, Vec3<F>(origin), Vec3<F>(w), ls.dist, -1, rng);
+        if (tr.is_black()) return;
+        const double pdf_b = c * inv_pi_v<double>;
+        const double wmis = ls.delta ? 1.0 : power_heuristic(double(ls.pdf), pdf_b);
+        add(thr * rho * tr * ls.L * F(c * inv_pi_v<double> * wmis / double(ls.pdf)));
+    };
+
+    const Ray<F> r{Vec3<F>(p), Vec3<F>(d)};
+    const SurfaceHit<F, S> sh = scene.intersect(r);
+    const double t_s = sh.hit() ? double(sh.t) : 1e30;
+    ++grain_rays;
+    const AggregateHit gh = agg.intersect(p, d, 0.0, t_s);
+    if (gh) {
+        const bool same = ps.have_last_grain && ps.last_grain.tile == gh.grain.tile && ps.last_grain.sphere == gh.grain.sphere;
+        // Eq. 5 switch at the next grain hit of an armed bundle.
+        if (armed && !ps.high && !same && ps.order >= hopt.min_ept_interactions) {
+            const Vec3d x = p + gh.t * d;
+            if (agg.boundary().shape().inside(x)) {
+                out.switched = true;
+                out.switch_order = ps.order;
+                if (hopt.mode != HybridMode::ept) {
+                    x_switch = x;
+                    ++ps.order;
+                    return 2;
+                }
+                ps.high = true;  // mode ept: only the split changes
+            }
+        }
+        if (!same) ++ps.order;
+        ps.have_last_grain = true;
+        ps.last_grain = gh.grain;
+        const GrainSojourn s = grain_sojourn(
+            agg, gh.grain, p + gh.t * d, d, gh.n, beta, rng, opt.mode, opt.max_events - ps.events,
+            [&](const Vec3d& x, const Vec3d& n, S& thr) {
+                const GrainMaterial& m = agg.exemplars()[gh.grain.exemplar].material();
+                S rho;
+                for (std::size_t c = 0; c < S::size; ++c) rho[c] = F(m.albedo[std::min<std::size_t>(c, 2)]);
+                nee_diffuse(x, n, rho, thr);
+            },
+            [](const Vec3d&, const Vec3d&) {});
+        ps.events += s.events;
+        if (s.kind == GrainSojourn::absorbed || beta.is_black()) return 1;
+        ps.last_p = s.p;
+        p = s.p;
+        d = s.d;
+        ps.specular = s.specular;
+        ps.last_pdf = s.pdf;
+    } else if (!sh.hit()) {
+        mis_emission(scene.environment(Vec3<F>(d)), SurfaceHit<F, S>{});
+        return 1;
+    } else {
+        const Vec3d x = p + t_s * d;
+        const Vec3d n(sh.n);
+        if (sh.light >= 0) mis_emission(scene.emitted(sh, Vec3<F>(d)), sh);
+        const bool from_outside = glm::dot(d, n) < 0;
+        ps.have_last_grain = false;
+        if (sh.type == SurfaceType::absorber) return 1;
+        if (sh.type == SurfaceType::passthrough) {
+            p = x + (from_outside ? -1e-5 : 1e-5) * n;
+            return 0;
+        }
+        ++ps.events;
+        if (sh.type == SurfaceType::diffuse) {
+            const Vec3d nf = from_outside ? n : -n;
+            nee_diffuse(x, nf, sh.reflectance, beta);
+            const Vec3d local = sample_cosine_hemisphere(rng.uniform2<double>());
+            d = glm::normalize(Frame<double>(nf).to_world(local));
+            beta *= sh.reflectance;
+            p = x + 1e-5 * (1.0 + max_abs_component(x)) * nf;
+            ps.specular = false;
+            ps.last_pdf = cosine_hemisphere_pdf(local.z);
+            ps.last_p = x;
+        } else {
+            bool refracted = false;
+            double eta_rel = 1;
+            const Vec3d w = sample_dielectric(d, n, double(sh.eta), rng.uniform<double>(), refracted, eta_rel);
+            if (refracted && opt.mode == TransportMode::radiance) beta /= F(eta_rel * eta_rel);
+            d = w;
+            p = x + (glm::dot(w, n) >= 0 ? 1e-5 : -1e-5) * (1.0 + max_abs_component(x)) * n;
+            ps.specular = true;
+            ps.last_pdf = 0;
+            ps.last_p = x;
+        }
+        if (beta.is_black()) return 1;
+    }
+    if (ps.events >= opt.rr_depth) {
+        const F q = std::min(F(1), beta.max_value());
+        if (q < F(1)) {
+            if (!(q > F(0)) || rng.uniform<F>() >= q) return 1;
+            beta /= q;
+        }
+    }
+    return 0;
+}
+
+}  // namespace detail
+
+/// Eq. 5's coherence measure: sigma_k = sqrt(1/N_k sum |x_i - mean|^2) of the given points.
+[[nodiscard]] inline double bundle_spread(const Vec3d* x, int n) noexcept {
+    if (n <= 0) return 0.0;
+    Vec3d m(0.0);
+    for (int i = 0; i < n; ++i) m += x[i];
+    m /= double(n);
+    double s = 0;
+    for (int i = 0; i < n; ++i) s += glm::dot(x[i] - m, x[i] - m);
+    return std::sqrt(s / double(n));
+}
+
+/// Trace one bundle of `n` camera paths (rays[i] with generators rngs[i], all of one pixel) in
+/// lock-step through the EPT scene `scene_ept` (lights and surfaces; the aggregate is not one of
+/// its shapes) containing `agg`, switching to VPT/DA in `scene_vpt` (see the file comment).
+/// n in [1, 64].
+template <LitScene Scene, BoundaryShape Shape, class Distance>
+    requires PhaseMedium<typename Scene::Medium>
+[[nodiscard]] HybridBundleResult<typename Scene::Spectrum> hybrid_bundle(
+    const Scene& scene_ept, const Scene& scene_vpt, const GranularAggregate<Shape>& agg,
+    const HybridContext<Distance>& ctx, const Ray<typename Scene::Float>* rays, Rng* rngs, int n,
+    const HybridOptions& opt) noexcept {
+    using S = typename Scene::Spectrum;
+    using Clock = std::chrono::steady_clock;
+    HybridBundleResult<S> res;
+    n = std::clamp(n, 1, 64);
+    res.n = n;
+    res.counters.paths = std::uint64_t(n);
+    std::array<detail::HybridEptPath<S>, 64> ps;
+    for (int i = 0; i < n; ++i) {
+        auto& q = ps[std::size_t(i)];
+        q.p = Vec3d(rays[i].o);
+        q.d = glm::normalize(Vec3d(rays[i].d));
+        q.last_p = q.p;
+    }
+    const double tau = opt.tau * agg.grain_radius();
+    bool armed = false;
+    double t_high = 0;
+    const auto t0 = opt.measure_time ? Clock::now() : Clock::time_point{};
+    int alive = n;
+    std::array<Vec3d, 64> xs;
+    while (alive > 0) {
+        for (int i = 0; i < n; ++i) {
+            auto& q = ps[std::size_t(i)];
+            if (!q.alive) continue;
+            Vec3d x_switch(0.0);
+            const int r = detail::hybrid_ept_step(scene_ept, agg, q, res.path[std::size_t(i)], rngs[i], opt, armed,
+                                                  res.counters.grain_rays, x_switch);
+            if (r == 0) continue;
+            q.alive = false;
+            if (r == 2) {
+                // P_a roulette, then the VPT (+ DA) continuation.
+                Rng& rng = rngs[i];
+                if (opt.acceptance < 1.0 && rng.uniform<double>() >= opt.acceptance) {
+                    ++res.counters.rejected;
+                    continue;
+                }
+                ++res.counters.switched;
+                res.counters.switch_depth += std::uint64_t(res.path[std::size_t(i)].switch_order);
+                const S beta = q.beta / float(opt.acceptance);
+                const auto th0 = opt.measure_time ? Clock::now() : Clock::time_point{};
+                res.path[std::size_t(i)].high +=
+                    hybrid_vpt_continuation(scene_vpt, ctx, x_switch, q.d, beta, rng, opt, &res.counters);
+                if (opt.measure_time) t_high += std::chrono::duration<double>(Clock::now() - th0).count();
+            }
+        }
+        // Eq. 5 on the vertices of the paths still in EPT.
+        int nk = 0;
+        for (int i = 0; i < n; ++i)
+            if (ps[std::size_t(i)].alive) xs[std::size_t(nk++)] = ps[std::size_t(i)].p;
+        alive = nk;
+        if (!armed && nk > 0) {
+            if (nk == 1 && opt.switch_single && n > 1)
+                armed = true;
+            else if (bundle_spread(xs.data(), nk) > tau * double(nk) / double(n))
+                armed = true;
+            else if (n == 1 && opt.switch_single)
+                armed = true;
+        }
+    }
+    if (opt.measure_time) {
+        const double total = std::chrono::duration<double>(Clock::now() - t0).count();
+        res.seconds_high = t_high;
+        res.seconds_low = std::max(0.0, total - t_high);
+    }
+    if (opt.mode == HybridMode::ept)
+        for (int i = 0; i < n; ++i)
+            if (res.path[std::size_t(i)].switched) res.counters.switch_depth += std::uint64_t(res.path[std::size_t(i)].switch_order);
+    return res;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Render driver with time to unit variance
+// ---------------------------------------------------------------------------------------------
+
+/// Result of a hybrid render: low-order (EPT) and high-order (after the switch) images, the
+/// per-pixel variance statistics of the bundle samples and the CPU time of the two parts.
+struct HybridImages {
+    Film low, high;
+    int spp = 0;                    ///< bundles per pixel
+    double var_total = 0;           ///< mean over pixels of the sample variance of one bundle estimate (channel mean)
+    double var_low = 0, var_high = 0;
+    double cpu_seconds_low = 0, cpu_seconds_high = 0;  ///< summed over threads
+    HybridCounters counters{};
+    [[nodiscard]] Image combined() const {
+        Image a = low.image();
+        const Image b = high.image();
+        for (std::size_t i = 0; i < a.rgb.size(); ++i) a.rgb[i] += b.rgb[i];
+        return a;
+    }
+    /// CPU seconds per bundle sample per pixel (the time of a 1-spp image).
+    [[nodiscard]] double seconds_per_spp() const noexcept {
+        return spp > 0 ? (cpu_seconds_low + cpu_seconds_high) / double(spp) : 0.0;
+    }
+    /// Meng15 Sec. 6: time to unit variance = mean pixel variance of a 1-spp image x its time.
+    [[nodiscard]] double ttuv() const noexcept { return var_total * seconds_per_spp(); }
+    /// The same for the high-order part alone (Table 2, right half).
+    [[nodiscard]] double ttuv_high() const noexcept { return spp > 0 ? var_high * cpu_seconds_high / double(spp) : 0.0; }
+    /// The same for the low-order part alone.
+    [[nodiscard]] double ttuv_low() const noexcept { return spp > 0 ? var_low * cpu_seconds_low / double(spp) : 0.0; }
+};
+
+/// Render with the hybrid integrator: every `stride`-th pixel in x and y (stride 1: the full
+/// image; the result then has ceil(w / stride) x ceil(h / stride) pixels, each the centre pixel
+/// of its block with the original footprint), `spp` bundles of opt.bundle_size paths per pixel.
+/// Path i of bundle b of pixel p uses Pcg32::from_key(seed, p, b * N + i) (p = full-image pixel
+/// index): images are bit-identical for any thread count. Rows over OpenMP threads.
+template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, class Progress = NoProgress>
+    requires PhaseMedium<typename Scene::Medium>
+[[nodiscard]] HybridImages render_hybrid(const Scene& scene_ept, const Scene& scene_vpt, const GranularAggregate<Shape>& agg,
+                                         const HybridContext<Distance>& ctx, const Camera& camera, int spp,
+                                         std::uint64_t seed, int threads, HybridOptions opt, int stride = 1,
+                                         Progress&& progress = {}) {
+    check_argument(spp >= 1, "render_hybrid", "spp", spp, ">= 1");
+    check_argument(threads >= 0, "render_hybrid", "threads", threads, ">= 0");
+    check_argument(stride >= 1, "render_hybrid", "stride", stride, ">= 1");
+    opt.validate("render_hybrid");
+    check_argument(opt.mode != HybridMode::ept_vpt_da || ctx.diffusion != nullptr, "render_hybrid", "ctx.diffusion",
+                   "null", "a HybridDiffusion for mode ept_vpt_da");
+    check_argument(ctx.medium >= 0, "render_hybrid", "ctx.medium", ctx.medium, ">= 0");
+    using F = typename Camera::Float;
+    using S = typename Scene::Spectrum;
+    opt.measure_time = true;
+    const int W = camera.width(), H = camera.height();
+    const int w = (W + stride - 1) / stride, h = (H + stride - 1) / stride;
+    const int N = opt.bundle_size;
+    HybridImages img{Film(w, h), Film(w, h), spp};
+    struct RowStats {
+        double var_t = 0, var_l = 0, var_h = 0, sec_l = 0, sec_h = 0;
+        HybridCounters c{};
+    };
+    std::vector<RowStats> rows(static_cast<std::size_t>(h));
+#if defined(_OPENMP)
+    const int nt = threads > 0 ? threads : omp_get_max_threads();
+#pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
+#endif
+    for (int y = 0; y < h; ++y) {
+        RowStats& rs = rows[std::size_t(y)];
+        std::array<Ray<F>, 64> rays;
+        std::array<Rng, 64> rngs;
+        for (int x = 0; x < w; ++x) {
+            const int X = std::min(W - 1, x * stride + stride / 2), Y = std::min(H - 1, y * stride + stride / 2);
+            const std::uint64_t pixel = std::uint64_t(Y) * std::uint64_t(W) + std::uint64_t(X);
+            Welford wt, wl, wh;
+            for (int s = 0; s < spp; ++s) {
+                for (int i = 0; i < N; ++i) {
+                    rngs[std::size_t(i)] = Rng::from_key(seed, pixel, std::uint64_t(s) * std::uint64_t(N) + std::uint64_t(i));
+                    const Vec2<F> u = rngs[std::size_t(i)].template uniform2<F>();
+                    rays[std::size_t(i)] = camera.generate_ray(F(X) + u.x, F(Y) + u.y);
+                }
+                const auto b = hybrid_bundle(scene_ept, scene_vpt, agg, ctx, rays.data(), rngs.data(), N, opt);
+                S lo = b.mean_low(), hi = b.mean_high();
+                if (!lo.is_finite()) lo = S(0.0f);
+                if (!hi.is_finite()) hi = S(0.0f);
+                img.low.add_sample(x, y, lo);
+                img.high.add_sample(x, y, hi);
+                wl.add(double(lo.average()));
+                wh.add(double(hi.average()));
+                wt.add(double(lo.average()) + double(hi.average()));
+                rs.sec_l += b.seconds_low;
+                rs.sec_h += b.seconds_high;
+                rs.c.merge(b.counters);
+            }
+            rs.var_t += wt.variance();
+            rs.var_l += wl.variance();
+            rs.var_h += wh.variance();
+        }
+        progress(1);
+    }
+    for (const RowStats& rs : rows) {
+        img.var_total += rs.var_t;
+        img.var_low += rs.var_l;
+        img.var_high += rs.var_h;
+        img.cpu_seconds_low += rs.sec_l;
+        img.cpu_seconds_high += rs.sec_h;
+        img.counters.merge(rs.c);
+    }
+    const double np = double(w) * double(h);
+    img.var_total /= np;
+    img.var_low /= np;
+    img.var_high /= np;
+    return img;
+}
+
+/// The preview of Meng15 Sec. 5 for P_a: V_L, V_H (mean pixel variances of the low- and
+/// high-order parts of one bundle sample), t_L, t_H (CPU seconds of the two parts per bundle
+/// sample per pixel) and P_a of Eq. 8.
+struct AcceptanceEstimate {
+    double V_L = 0, V_H = 0, t_L = 0, t_H = 0;
+    double P_a = 1;
+};
+
+/// Estimate the optimal acceptance probability (Eq. 8) from a preview render of every
+/// `stride`-th pixel (10: Meng15's 1%-size image) with P_a = 1 and the same spp.
+template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera>
+    requires PhaseMedium<typename Scene::Medium>
+[[nodiscard]] AcceptanceEstimate estimate_optimal_acceptance(const Scene& scene_ept, const Scene& scene_vpt,
+                                                             const GranularAggregate<Shape>& agg,
+                                                             const HybridContext<Distance>& ctx, const Camera& camera,
+                                                             int spp, std::uint64_t seed, int threads, HybridOptions opt,
+                                                             int stride = 10) {
+    opt.acceptance = 1.0;
+    const HybridImages pv = render_hybrid(scene_ept, scene_vpt, agg, ctx, camera, spp, seed, threads, opt, stride);
+    AcceptanceEstimate a;
+    const double np = double(pv.low.width()) * double(pv.low.height()) * double(spp);
+    a.V_L = pv.var_low;
+    a.V_H = pv.var_high;
+    a.t_L = pv.cpu_seconds_low / np;
+    a.t_H = pv.cpu_seconds_high / np;
+    a.P_a = optimal_acceptance(a.V_L, a.V_H, a.t_L, a.t_H);
+    return a;
+}
+
+}  // namespace grainlight
