@@ -1,0 +1,406 @@
+// Tests for Moon07 shell transport (media/shell.hpp, precompute/shell_builder.hpp):
+//  - exit coordinates (cos theta_1, u, v) round trip and the concentric-map inverse;
+//  - k-NN density estimation against analytic densities (uniform exits on a sphere with
+//    cosine-distributed directions: density 1/2 in (cos theta_1, u, v); a linear density in
+//    cos theta_1) and its integral;
+//  - NMF: non-negative factors, error non-increasing with rank, exact recovery of a rank-3 matrix;
+//  - tables built with the walk kernel in a continuous medium: f_a(d) = exp(-sigma_t d) (Beer-
+//    Lambert), and "shells vs VPT" (DESIGN.md): chained shell steps reproduce direct walk-kernel
+//    paths stopped at the same chained spheres (mean-square displacement, survival, direction);
+//  - explicit sphere packings: index-matched absorbing spheres give the stereological absorption
+//    bound (mean fraction of a line inside the spheres = packing fraction f);
+//  - save/load round trip, corrupted and truncated files, bad arguments.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <vector>
+
+#include "grainlight/core/statistics.hpp"
+#include "grainlight/media/continuous.hpp"
+#include "grainlight/media/shell.hpp"
+#include "grainlight/packing/poisson.hpp"
+#include "grainlight/phase/henyey_greenstein.hpp"
+#include "grainlight/precompute/shell_builder.hpp"
+
+using namespace grainlight;
+
+static_assert(Medium<ShellMedium<double>>);
+static_assert(Medium<ShellMedium<float, RGB>>);
+
+namespace {
+
+using HG = HenyeyGreenstein<double>;
+using CMedium = ContinuousMedium<HG>;
+
+// One shared table per configuration (built once; each build takes well under a second).
+struct ContinuousFixture {
+    double sigma_t = 1.0, albedo = 0.9, g = 0.6;
+    std::vector<double> radii{0.5, 1.0, 1.5, 2.0};
+    ShellSamples samples;
+    ShellBuildResult built;
+    ContinuousFixture() {
+        CMedium m(sigma_t, albedo, HG(g));
+        samples = collect_shell_samples(ContinuousShellSource<CMedium>(m), radii, 100000, 7, 64, 4.0);
+        ShellBuildOptions o;
+        o.rank = 6;
+        built = build_shell_table(samples, o);
+    }
+};
+
+const ContinuousFixture& fixture() {
+    static const ContinuousFixture f;
+    return f;
+}
+
+}  // namespace
+
+TEST_CASE("Shell exit coordinates round-trip", "[shells][coords]") {
+    Rng rng = Rng::from_key(3);
+    for (int i = 0; i < 2000; ++i) {
+        const Vec2d p = sample_uniform_disk_concentric(rng.uniform2<double>());
+        const Vec2d u = detail::inverse_disk_concentric(p);
+        const Vec2d p2 = sample_uniform_disk_concentric(u);
+        REQUIRE(std::abs(p2.x - p.x) < 1e-9);
+        REQUIRE(std::abs(p2.y - p.y) < 1e-9);
+
+        const Vec3d x(rng.uniform<double>(), rng.uniform<double>(), -rng.uniform<double>());
+        const Vec3d omega = sample_uniform_sphere(rng.uniform2<double>());
+        ShellCoords<double> c;
+        c.cos_theta1 = 2 * rng.uniform<double>() - 1;
+        c.u = rng.uniform<double>();
+        c.v = rng.uniform<double>();
+        Vec3d y, w;
+        shell_exit_from_coords(x, omega, 1.7, c, 2 * pi_v<double> * rng.uniform<double>(), y, w);
+        REQUIRE(std::abs(glm::length(y - x) - 1.7) < 1e-12);
+        REQUIRE(glm::dot(w, y - x) >= -1e-12);  // outgoing
+        const ShellCoords<double> c2 = shell_coords(x, omega, y, w);
+        REQUIRE(c2.cos_theta1 == Approx(c.cos_theta1).margin(1e-9));
+        REQUIRE(c2.u == Approx(c.u).margin(1e-7));
+        REQUIRE(c2.v == Approx(c.v).margin(1e-7));
+    }
+}
+
+TEST_CASE("k-NN density matches analytic densities and integrates to the sample fraction", "[shells][knn]") {
+    // Exits uniform over the sphere (area) with directions cosine-distributed about the normal
+    // (uniform in projected solid angle): T = 1 / (4 pi r^2 * pi) per area x projected solid
+    // angle, i.e. density 1/2 on the (cos theta_1, u, v) box of volume 2.
+    Rng rng = Rng::from_key(11);
+    const int n = 200000;
+    std::vector<float> pts;
+    const Vec3d x(0.3, -0.2, 0.1), omega = glm::normalize(Vec3d(1, 2, 3));
+    for (int i = 0; i < n; ++i) {
+        const Vec3d nrm = sample_uniform_sphere(rng.uniform2<double>());
+        const Vec3d local = sample_cosine_hemisphere(rng.uniform2<double>());
+        const Vec3d w = Frame<double>(nrm).to_world(local);
+        const auto c = shell_coords(x, omega, x + 2.0 * nrm, w);
+        pts.insert(pts.end(), {float(c.cos_theta1), float(c.u), float(c.v)});
+    }
+    const int nc = 10, nu = 8, nv = 8, k = 64;
+    // Half of the "paths" produced no sample: the density must integrate to 0.5.
+    const auto g = knn_density_grid(pts, 2.0 * n, k, nc, nu, nv);
+    double integral = 0, sq = 0;
+    for (double d : g) {
+        integral += d * 2.0 / (nc * nu * nv);
+        sq += (d / 0.25 - 1) * (d / 0.25 - 1);
+    }
+    const double rms = std::sqrt(sq / double(g.size()));
+    INFO("integral " << integral << ", rms relative error " << rms);
+    CHECK(integral == Approx(0.5).epsilon(0.01));
+    // (k-1)/(N V) has relative standard deviation ~ 1/sqrt(k - 2) = 0.127 for k = 64.
+    CHECK(rms < 0.2);
+    CHECK(rms > 0.05);  // it is a noisy estimate: a much smaller error would mean it is not k-NN
+
+    // Linear density p(c) = (1 + c) / 2 on [-1, 1], uniform in (u, v): per-cos-cell averages.
+    pts.clear();
+    for (int i = 0; i < n; ++i) {
+        const double c = 2 * std::sqrt(rng.uniform<double>()) - 1;  // inverse CDF of (1+c)/2
+        pts.insert(pts.end(), {float(c), rng.uniform<float>(), rng.uniform<float>()});
+    }
+    const auto h = knn_density_grid(pts, n, k, nc, nu, nv);
+    for (int j = 1; j < nc - 1; ++j) {  // interior cells (the end cells see a kink of the density)
+        double avg = 0;
+        for (int q = 0; q < nu * nv; ++q) avg += h[std::size_t(j * nu * nv + q)];
+        avg /= nu * nv;
+        const double c = -1 + (j + 0.5) * 2.0 / nc;
+        CHECK(avg == Approx((1 + c) / 2).epsilon(0.05));
+    }
+}
+
+TEST_CASE("NMF: non-negative factors, error non-increasing with rank, exact rank-3 recovery", "[shells][nmf]") {
+    Rng rng = Rng::from_key(5);
+    Eigen::MatrixXd A(40, 3), B(3, 30);
+    for (Eigen::Index i = 0; i < A.size(); ++i) A.data()[i] = rng.uniform<double>();
+    for (Eigen::Index i = 0; i < B.size(); ++i) B.data()[i] = rng.uniform<double>();
+    const Eigen::MatrixXd V = A * B;
+    double prev = 1e9;
+    for (int rank = 1; rank <= 4; ++rank) {
+        const NmfResult r = nmf(V, rank, 3000, 1);
+        INFO("rank " << rank << " error " << r.relative_error);
+        CHECK(r.W.minCoeff() >= 0);
+        CHECK(r.H.minCoeff() >= 0);
+        CHECK(r.relative_error <= prev * 1.001);
+        prev = r.relative_error;
+        if (rank == 1) CHECK(r.relative_error > 0.05);
+        if (rank >= 3) CHECK(r.relative_error < 0.01);
+    }
+    // On a real shell density: rank 1 is clearly worse than rank 6.
+    const auto& f = fixture();
+    const double e1 = nmf(f.built.density, 1, 400).relative_error;
+    const double e2 = nmf(f.built.density, 2, 400).relative_error;
+    INFO("shell density: rank 1 " << e1 << ", rank 2 " << e2 << ", rank 6 " << f.built.nmf_relative_error);
+    CHECK(e2 < e1);
+    CHECK(f.built.nmf_relative_error < e2);
+    CHECK_THROWS_AS(nmf(-V, 2, 10), invalid_argument);
+    CHECK_THROWS_AS(nmf(V, 0, 10), invalid_argument);
+}
+
+TEST_CASE("Continuous-medium table: Beer-Lambert f_a, probabilities, k-NN integral", "[shells][builder]") {
+    const auto& f = fixture();
+    const ShellTable& t = f.built.table;
+    const double N = double(t.n_paths);
+    for (std::size_t i = 0; i < t.n_shells(); ++i) {
+        const double expect = std::exp(-f.sigma_t * t.radii[i]);  // Beer-Lambert
+        CHECK(std::abs(t.p_unscattered[i] - expect) < 4 * std::sqrt(expect * (1 - expect) / N));
+        // Raw k-NN integral equals the scattered fraction up to the estimator's bias (~1/k).
+        CHECK(f.built.knn_integral[i] == Approx(t.p_scattered[i]).epsilon(0.05));
+    }
+    // Smallest shell, absorption before any exit: P(first event inside r and it is an absorption)
+    // is exactly (1 - albedo)(1 - e^{-r}) plus multiple-scattering terms; bound it.
+    CHECK(t.p_absorbed[0] > (1 - f.albedo) * (1 - std::exp(-0.5)) * 0.99);
+    ShellMedium<double> m(t);
+    for (double d : {0.1, 0.7, 1.3, 2.9}) {
+        const double expect = std::exp(-f.sigma_t * d);
+        CHECK(std::abs(m.attenuation(d) - expect) < 4 * std::sqrt(expect * (1 - expect) / N) + 2e-3);
+    }
+    // The forward hemisphere dominates for g = 0.6: marginal p_r(y) larger ahead than behind.
+    CHECK(m.exit_position_density(1, 0.9) > 3 * m.exit_position_density(1, -0.9));
+}
+
+TEST_CASE("Shells vs walk kernel: chained shell steps reproduce direct paths in a continuous medium",
+          "[shells][vpt]") {
+    const auto& f = fixture();
+    const int shell = 1;  // r = 1
+    const double r = f.radii[shell];
+    const int n_steps = 6;
+    // Direct: walk-kernel paths; whenever the path first exits the sphere of radius r around the
+    // current centre, that exit point/direction becomes the next centre/reference direction
+    // (the continuous medium is memoryless, so this is exactly what chaining shells models).
+    CMedium cm(f.sigma_t, f.albedo, HG(f.g));
+    UnboundedMediumScene<CMedium> scene{&cm};
+    struct Stats {
+        std::vector<Welford> msd, cosw;
+        std::vector<double> alive;
+    };
+    auto make = [&] {
+        Stats s;
+        s.msd.resize(n_steps + 1);
+        s.cosw.resize(n_steps + 1);
+        s.alive.assign(n_steps + 1, 0.0);
+        return s;
+    };
+    Stats direct = make(), shells = make();
+    const int n_paths = 60000;
+    for (int p = 0; p < n_paths; ++p) {
+        Rng rng = Rng::from_key(99, std::uint64_t(p));
+        auto st = start_path<double, Spectrum<1, double>>(Ray<double>(Vec3d(0), Vec3d(0, 0, 1)), 0);
+        struct Cb {
+            Stats& s;
+            double r;
+            int n_steps;
+            Vec3d c{0.0};
+            int n = 0;
+            void on_segment(const PathState<double, Spectrum<1, double>>& ps, double t) {
+                Vec3d o = ps.ray.o;
+                double left = t;
+                while (n < n_steps) {
+                    const Vec3d rel = o - c;
+                    const double b = glm::dot(rel, ps.ray.d);
+                    const double sexit = -b + std::sqrt(std::max(0.0, b * b - (glm::dot(rel, rel) - r * r)));
+                    if (!(sexit <= left)) break;
+                    o += sexit * ps.ray.d;
+                    left -= sexit;
+                    c = o;
+                    ++n;
+                    s.alive[std::size_t(n)] += 1;
+                    s.msd[std::size_t(n)].add(glm::dot(c, c));
+                    s.cosw[std::size_t(n)].add(ps.ray.d.z);
+                }
+            }
+            bool on_scatter(PathState<double, Spectrum<1, double>>&, const Interaction<double, Spectrum<1, double>>&,
+                            const CMedium&) {
+                return n < n_steps;
+            }
+        } cb{direct, r, n_steps};
+        (void)walk(scene, st, rng, cb, WalkOptions<double>{});
+    }
+    // Shell stepping with the tabulated T_r (analog absorption, to compare survival directly).
+    // Only shell `shell` fits: a boundary query returning r selects it.
+    struct FixedR {
+        double r;
+        double operator()(const Vec3d&) const noexcept { return r; }
+    };
+    ShellMedium<double, Spectrum<1, double>, FixedR> sm(f.built.table, FixedR{r + 1e-9}, true);
+    const auto inf = std::numeric_limits<double>::infinity();
+    for (int p = 0; p < n_paths; ++p) {
+        Rng rng = Rng::from_key(1234, std::uint64_t(p));
+        Vec3d x(0.0), w(0, 0, 1);
+        for (int n = 1; n <= n_steps; ++n) {
+            const ShellStep<double> s = sm.step(x, w, inf, rng, [](const Vec3d&) { return true; });
+            REQUIRE(s.shell == shell);
+            if (s.kind == ShellStepKind::absorbed) break;
+            REQUIRE(std::abs(glm::length(s.p - x) - r) < 1e-9);
+            x = s.p;
+            w = s.w;
+            shells.alive[std::size_t(n)] += 1;
+            shells.msd[std::size_t(n)].add(glm::dot(x, x));
+            shells.cosw[std::size_t(n)].add(w.z);
+        }
+    }
+    for (int n = 1; n <= n_steps; ++n) {
+        const double a1 = direct.alive[n] / n_paths, a2 = shells.alive[n] / n_paths;
+        const double m1 = direct.msd[n].mean(), m2 = shells.msd[n].mean();
+        const double se_m = std::sqrt(direct.msd[n].variance() / direct.msd[n].count() +
+                                      shells.msd[n].variance() / shells.msd[n].count());
+        const double c1 = direct.cosw[n].mean(), c2 = shells.cosw[n].mean();
+        INFO("step " << n << ": survival " << a1 << " vs " << a2 << ", <|x|^2> " << m1 << " vs " << m2 << " (se "
+                     << se_m << "), <cos> " << c1 << " vs " << c2);
+        CHECK(std::abs(a1 - a2) < 4 * std::sqrt(2 * a1 * (1 - a1) / n_paths) + 0.003);
+        // Table discretization (24 cells in cos theta_1, 16x16 directions, rank 6) adds a small
+        // systematic error on top of the MC error.
+        CHECK(std::abs(m1 - m2) < 4 * se_m + 0.02 * m1);
+        CHECK(std::abs(c1 - c2) < 0.03);
+    }
+}
+
+TEST_CASE("ShellMedium meets the Medium concept: weights carry the absorption", "[shells][medium]") {
+    const auto& f = fixture();
+    ShellMedium<double> m(f.built.table);  // infinite: always the largest shell, r = 2
+    const ShellTable& t = f.built.table;
+    const std::size_t last = t.n_shells() - 1;
+    Rng rng = Rng::from_key(8);
+    const Ray<double> ray(Vec3d(0), Vec3d(0, 0, 1));
+    const int n = 100000;
+    double n_null = 0, wsum = 0;
+    for (int i = 0; i < n; ++i) {
+        const auto it = m.sample_interaction(ray, std::numeric_limits<double>::infinity(), rng);
+        REQUIRE(it.kind != EventKind::escape);
+        if (it.kind == EventKind::null) {
+            n_null += 1;
+            REQUIRE(it.p.z == Approx(2.0));
+            wsum += it.weight[0];
+        } else {
+            REQUIRE(it.kind == EventKind::scatter);
+            REQUIRE(it.has_direction);
+            REQUIRE(it.nee == NeeKind::custom);
+            REQUIRE(glm::length(it.p) == Approx(2.0));
+            REQUIRE(it.direction_pdf > 0);
+            wsum += it.weight[0];
+        }
+    }
+    // E[weight] = P(not absorbed within the shell).
+    const double expect = 1 - t.p_absorbed[last];
+    CHECK(std::abs(wsum / n - expect) < 0.01);
+    CHECK(std::abs(n_null / n - t.p_unscattered[last]) < 4 * std::sqrt(0.25 / n));
+    // Near a boundary (t_max < r): unscattered escapes with probability f_a(t_max).
+    double esc = 0;
+    for (int i = 0; i < n; ++i) esc += m.sample_interaction(ray, 0.8, rng).kind == EventKind::escape;
+    CHECK(std::abs(esc / n - m.attenuation(0.8)) < 4 * std::sqrt(0.25 / n));
+    // The sampled direction pdf equals exit_direction_density * cos on the sampled exit.
+    Vec3d y, w;
+    double pdf = 0;
+    m.sample_exit(1, Vec3d(0), Vec3d(0, 0, 1), rng, y, w, pdf);
+    const auto c = shell_coords(Vec3d(0), Vec3d(0, 0, 1), y, w);
+    CHECK(pdf == Approx(m.exit_direction_density(1, c) * glm::dot(w, glm::normalize(y))).epsilon(1e-6));
+}
+
+TEST_CASE("Index-matched absorbing spheres: absorption within the stereological bounds", "[shells][packing]") {
+    Rng prng = Rng::from_key(2);
+    const double f_pack = 0.3;
+    const PeriodicTile tile = random_sequential_addition(64, f_pack, prng, 1.0);
+    const double R = tile.radius(), sigma_a = 0.5 / R;
+    const std::vector<double> radii{2 * R, 4 * R};
+    const ShellSamples s =
+        collect_shell_samples(SpherePackingShellSource(tile, 1.0, sigma_a, 10 * R), radii, 40000, 3, 64, 8 * R);
+    const ShellTable t = build_shell_table(s).table;
+    for (std::size_t i = 0; i < radii.size(); ++i) {
+        // Index matched: no event except absorption, so nothing exits scattered.
+        CHECK(s.n_scattered(i) == 0);
+        // Start points are uniform in space, so the mean length L inside spheres along a straight
+        // segment of length r is f r (stereology). exp(-sigma_a L) is convex in L on [0, r]:
+        // Jensen gives p_absorbed <= 1 - exp(-sigma_a f r); the chord below the curve gives
+        // p_absorbed >= f (1 - exp(-sigma_a r)).
+        const double r = radii[i];
+        const double upper = 1 - std::exp(-sigma_a * f_pack * r), lower = f_pack * (1 - std::exp(-sigma_a * r));
+        const double se = std::sqrt(0.25 / double(t.n_paths));
+        INFO("shell " << i << ": p_absorbed " << t.p_absorbed[i] << " bounds " << lower << " .. " << upper);
+        CHECK(t.p_absorbed[i] >= lower - 4 * se);
+        CHECK(t.p_absorbed[i] <= upper + 4 * se);
+    }
+    // Glass spheres (eta = 1.5) without absorption: nothing absorbed, most exits scattered,
+    // p_unscattered(r) = f_a(r) (the same event: the first free path exceeds r).
+    const ShellSamples g =
+        collect_shell_samples(SpherePackingShellSource(tile, 1.5, 0.0, 10 * R), radii, 20000, 4, 64, 8 * R);
+    const ShellTable tg = build_shell_table(g).table;
+    ShellMedium<double> mg(tg);
+    for (std::size_t i = 0; i < radii.size(); ++i) {
+        CHECK(tg.p_absorbed[i] == 0.0);
+        CHECK(tg.p_scattered[i] > 0.5);
+        CHECK(mg.attenuation(radii[i]) == Approx(tg.p_unscattered[i]).margin(1.5 / 64 * 0 + 0.01));
+    }
+    CHECK_THROWS_AS(SpherePackingShellSource(tile, -1.0, 0.0, 1.0), invalid_argument);
+    CHECK_THROWS_AS(SpherePackingShellSource(tile, 1.5, 0.0, 0.0), invalid_argument);
+}
+
+TEST_CASE("Shell tables: save/load round trip, corrupted and truncated files", "[shells][io]") {
+    const auto& f = fixture();
+    const auto dir = std::filesystem::temp_directory_path() / "grainlight_test_shells";
+    std::filesystem::create_directories(dir);
+    const auto path = dir / "table.shel";
+    f.built.table.save(path);
+    const ShellTable t = ShellTable::load(path);
+    CHECK(t.radii == f.built.table.radii);
+    CHECK(t.W == f.built.table.W);
+    CHECK(t.H == f.built.table.H);
+    CHECK(t.fa == f.built.table.fa);
+    CHECK(t.p_scattered == f.built.table.p_scattered);
+    CHECK(t.n_paths == f.built.table.n_paths);
+
+    std::vector<char> bytes;
+    {
+        std::ifstream in(path, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    auto write = [&](const std::vector<char>& b) {
+        const auto p = dir / "bad.shel";
+        std::ofstream out(p, std::ios::binary | std::ios::trunc);
+        out.write(b.data(), std::streamsize(b.size()));
+        return p;
+    };
+    auto flipped = bytes;
+    flipped[bytes.size() / 2] ^= 0x5a;
+    CHECK_THROWS_AS(ShellTable::load(write(flipped)), format_error);
+    CHECK_THROWS_AS(ShellTable::load(write(std::vector<char>(bytes.begin(), bytes.begin() + 100))), format_error);
+    CHECK_THROWS_AS(ShellTable::load(write(std::vector<char>(bytes.begin(), bytes.begin() + 20))), format_error);
+    CHECK_THROWS_AS(ShellTable::load(dir / "does_not_exist.shel"), io_error);
+
+    // A valid container whose payload breaks an invariant (negative W entry) is a format_error.
+    ShellTable bad = f.built.table;
+    auto payload = bad.to_payload();
+    const std::size_t w_offset = 4 + 4 * 4 + 8 + 8 + 8 + 8 * bad.n_shells() * 4;
+    const double neg = -1.0;
+    std::memcpy(payload.data() + w_offset, &neg, sizeof neg);
+    CHECK_THROWS_AS(ShellTable::from_payload(payload), format_error);
+    // Hostile dimensions cannot make the loader allocate: format_error.
+    auto huge = f.built.table.to_payload();
+    const std::int32_t big = 4000;
+    std::memcpy(huge.data() + 4, &big, sizeof big);
+    CHECK_THROWS_AS(ShellTable::from_payload(huge), format_error);
+
+    bad.p_scattered[0] += 0.5;
+    CHECK_THROWS_AS(bad.save(dir / "x.shel"), invalid_argument);
+    CHECK_THROWS_AS(ShellMedium<double>(bad), invalid_argument);
+    std::filesystem::remove_all(dir);
+}
