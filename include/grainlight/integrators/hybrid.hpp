@@ -624,8 +624,12 @@ template <LitScene Scene, BoundaryShape Shape, class Distance>
             auto& q = ps[std::size_t(i)];
             if (!q.alive) continue;
             Vec3d x_switch(0.0);
+            // Mode ept: the steps after the would-be switch are the high-order part's cost.
+            const bool time_step = opt.measure_time && opt.mode == HybridMode::ept && q.high;
+            const auto ts0 = time_step ? Clock::now() : Clock::time_point{};
             const int r = detail::hybrid_ept_step(scene_ept, agg, q, res.path[std::size_t(i)], rngs[i], opt, armed,
                                                   res.counters.grain_rays, x_switch);
+            if (time_step) t_high += std::chrono::duration<double>(Clock::now() - ts0).count();
             if (r == 0) continue;
             q.alive = false;
             if (r == 2) {
@@ -665,7 +669,10 @@ template <LitScene Scene, BoundaryShape Shape, class Distance>
     }
     if (opt.mode == HybridMode::ept)
         for (int i = 0; i < n; ++i)
-            if (res.path[std::size_t(i)].switched) res.counters.switch_depth += std::uint64_t(res.path[std::size_t(i)].switch_order);
+            if (res.path[std::size_t(i)].switched) {
+                ++res.counters.switched;
+                res.counters.switch_depth += std::uint64_t(res.path[std::size_t(i)].switch_order);
+            }
     return res;
 }
 

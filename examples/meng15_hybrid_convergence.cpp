@@ -1,0 +1,232 @@
+// meng15_hybrid_convergence: Meng15 Sec. 5-6 (Table 2, Figs. 11-13) -- a sphere of grains on a
+// diffuse ground under a small quad light, rendered with explicit path tracing (EPT), EPT -> VPT
+// and EPT -> VPT -> DA (integrators/hybrid.hpp), each with P_a = 1 and with the optimal
+// acceptance probability of Eq. 8 estimated on a preview of every 10th pixel in x and y (1% of
+// the pixels). Prints the time to unit variance (ttuv, Sec. 6) of the whole image and of its
+// high-order part, the speedups over EPT beside the paper's Table 2 speedups, the relative
+// difference of each image's mean radiance to the EPT reference, the switch statistics and
+// d_DA.
+//
+//   meng15_hybrid_convergence [--quality quick|full] [--out DIR] [--seed S] [--threads N]
+//                             [--spp N] [--radius R] [--absorption A] [--width W] [--exposure EV]
+//
+// The effective medium comes from the virtual scatterometer of the same grain
+// (precompute/scatterometer.hpp, make_effective_medium). Writes EXR + PNG per technique, a CSV of
+// the table, a bar plot of the speedups (ours vs the paper's), and a JSON summary line.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "common/cli.hpp"
+#include "common/output.hpp"
+#include "common/progress.hpp"
+#include "grainlight/integrators/hybrid.hpp"
+#include "grainlight/media/continuous.hpp"
+#include "grainlight/media/teleportation.hpp"
+#include "grainlight/packing/md_packer.hpp"
+#include "grainlight/phase/tabulated.hpp"
+#include "grainlight/precompute/scatterometer.hpp"
+#include "grainlight/scene/camera.hpp"
+#include "grainlight/scene/image_io.hpp"
+#include "grainlight/scene/scene.hpp"
+
+namespace gl = grainlight;
+using namespace gl_examples;
+
+namespace {
+
+struct Technique {
+    std::string name;
+    gl::HybridMode mode;
+    bool optimal_pa;
+    // Meng15 Table 2 speedups over EPT (combined; high order) for SPICES, SANDCASTLE, SNOWMAN LG.,
+    // SNOWMAN SM.
+    double paper_total[4];
+    double paper_high[4];
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    return run_main("meng15_hybrid_convergence", [&] {
+        Cli cli(argc, argv, "meng15_hybrid_convergence",
+                "Meng15 Table 2: time to unit variance of EPT, EPT+VPT and EPT+VPT+DA (P_a = 1 and Eq. 8)");
+        cli.common_options("out/meng15_hybrid_convergence")
+            .option("spp", "bundles of 16 paths per pixel (>= 2; default 2 quick, 8 full)")
+            .option("radius", "radius of the sphere of grains in grain radii", "20")
+            .option("absorption", "interior absorption of the ice-like grains per grain radius (green)", "0.01")
+            .option("width", "image width in pixels (height = 3/4 width; default 120 quick, 240 full)")
+            .option("exposure", "PNG exposure in stops", "0");
+        cli.finish();
+        const bool full = cli.full_quality();
+        const auto out = cli.out_dir("out/meng15_hybrid_convergence");
+        const int threads = cli.threads();
+        const std::uint64_t seed = cli.seed();
+        const std::uint64_t spp = cli.integer("spp", full ? 8 : 2);
+        if (spp < 2 || spp > 4096) throw cli_error("--spp must be in [2, 4096] (ttuv needs a sample variance)");
+        const double Rb = cli.num("radius", 20.0);
+        if (!(Rb >= 4.0 && Rb <= 200.0)) throw cli_error("--radius must be in [4, 200] grain radii");
+        const double absorption = cli.num("absorption", 0.01);
+        if (!(absorption >= 0.0 && absorption <= 1.0)) throw cli_error("--absorption must be in [0, 1]");
+        const double exposure = cli.num("exposure", 0.0);
+        const std::uint64_t width_arg = cli.integer("width", full ? 240 : 120);
+        if (width_arg < 8 || width_arg > 4096) throw cli_error("--width must be in [8, 4096]");
+        const int width = int(width_arg), height = std::max(6, int(width_arg * 3 / 4));
+
+        // Packing (MD, f = 0.6, grain bounding radius 1), grain (ice-like sphere, slightly
+        // absorbing, bluish), its scatterometer statistics and the effective medium (Eq. 4).
+        const auto t_setup0 = std::chrono::steady_clock::now();
+        const auto packed = gl::md_pack(full ? 400 : 200, 0.6, seed);
+        const double s = 1.0 / packed.tile.radius();
+        std::vector<gl::Vec3d> centers = packed.tile.centers();
+        for (auto& c : centers) c *= s;
+        const gl::PeriodicTile tile(packed.tile.side() * s, 1.0, std::move(centers));
+        const gl::GrainMaterial mat =
+            gl::GrainMaterial::make_absorbing_dielectric(1.31, gl::RGBd{2.0 * absorption, absorption, 0.5 * absorption});
+        const gl::SphereBoundary shape(gl::Vec3d(0.0), Rb);
+        gl::GranularAggregate<gl::SphereBoundary> agg(tile, gl::VoxelizedBoundary<gl::SphereBoundary>(shape, tile.side()),
+                                                      {gl::GrainExemplar::sphere(1.0, mat)}, {1.0}, seed);
+        gl::ScatterometerConfig cfg;
+        cfg.rays = full ? 400000 : 100000;
+        cfg.seed = seed;
+        const gl::GrainStats stats = gl::run_scatterometer(gl::ScatterometerGrain::sphere(1.0, mat), cfg);
+        const gl::EffectiveRteParams rte = gl::effective_rte_params(stats, tile.packing_fraction(), 1.0);
+        const gl::HybridDiffusion diffusion = gl::make_hybrid_diffusion(rte);
+        using Medium = gl::ContinuousMedium<gl::TabulatedPhase<float, gl::RGB>, gl::RGB>;
+        const Medium medium = gl::make_effective_medium<float, gl::RGB>(stats, tile.packing_fraction(), 1.0);
+
+        // Scenes: EPT (ground + lights) and VPT (+ the boundary sphere holding the effective medium).
+        using Scene = gl::Scene<Medium>;
+        Scene scene_ept;
+        const float R = float(Rb);
+        scene_ept.add_shape(gl::QuadShape<float>(gl::Vec3f(-6 * R, -R, -6 * R), gl::Vec3f(0, 0, 12 * R), gl::Vec3f(12 * R, 0, 0)),
+                            gl::Material<float, gl::RGB>::diffuse(gl::RGB{0.5f, 0.45f, 0.4f}));
+        scene_ept.add_quad_light(gl::QuadShape<float>(gl::Vec3f(-0.4f * R, 2.5f * R, -0.4f * R), gl::Vec3f(0.8f * R, 0, 0),
+                                                      gl::Vec3f(0, 0, 0.8f * R)),
+                                 gl::RGB{40.0f, 38.0f, 35.0f});
+        scene_ept.add_light(Scene::LightT::environment_light(gl::RGB{0.03f, 0.04f, 0.06f}));
+        Scene scene_vpt = scene_ept;
+        const int m_eff = scene_vpt.add_medium(medium);
+        const int boundary_shape = scene_vpt.add_shape(gl::SphereShape<float>(gl::Vec3f(0.0f), R),
+                                                       gl::Material<float, gl::RGB>::index_matched(), m_eff, -1);
+        const gl::HybridContext<gl::BoundaryDistance<gl::SphereBoundary>> ctx{m_eff, boundary_shape, {shape}, &diffusion};
+        const gl::PinholeCamera<float> camera(gl::Vec3f(0.0f, 0.7f * R, 3.4f * R), gl::Vec3f(0.0f, -0.15f * R, 0.0f),
+                                              gl::Vec3f(0, 1, 0), 42.0f, width, height);
+        const double setup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_setup0).count();
+
+        std::printf("Meng15 Table 2 (hybrid EPT -> VPT -> DA): sphere of %.0f grain radii, ice-like grains (ior 1.31, "
+                    "albedo %.3f %.3f %.3f), f = %.3f\n",
+                    Rb, stats.alpha_s(0), stats.alpha_s(1), stats.alpha_s(2), tile.packing_fraction());
+        std::printf("  effective medium: sigma_t %.4f /R, g %.3f, sigma_t' %.4f /R, d_DA = %.2f R (Sec. 5), %dx%d px, %llu "
+                    "bundles x 16 paths per pixel, setup %.1f s\n",
+                    rte.sigma_t[1], rte.g[1], rte.sigma_t_reduced[1], diffusion.d_DA, width, height,
+                    (unsigned long long)spp, setup_s);
+
+        const std::vector<Technique> techniques = {
+            {"EPT", gl::HybridMode::ept, false, {1, 1, 1, 1}, {1, 1, 1, 1}},
+            {"EPT+VPT Pa=1", gl::HybridMode::ept_vpt, false, {4.0, 2.1, 30.3, 16.8}, {130.8, 206.8, 404.6, 381.5}},
+            {"EPT+VPT Pa=opt", gl::HybridMode::ept_vpt, true, {6.5, 2.2, 101.0, 54.4}, {137.8, 230.0, 385.3, 271.4}},
+            {"EPT+VPT+DA Pa=1", gl::HybridMode::ept_vpt_da, false, {7.4, 2.2, 246.0, 102.0}, {2554.0, 26.5, 8473.0, 6431.0}},
+            {"EPT+VPT+DA Pa=opt", gl::HybridMode::ept_vpt_da, true, {8.0, 2.2, 260.0, 114.0}, {1968.0, 242.0, 7394.0, 4997.0}},
+        };
+        Csv csv({"technique", "P_a", "ttuv", "ttuv_high", "speedup", "speedup_high", "paper_speedup_min", "paper_speedup_max",
+                 "paper_speedup_high_min", "paper_speedup_high_max", "mean_radiance", "rel_diff_vs_ept", "rel_diff_sigma",
+                 "switched_fraction", "mean_switch_interactions", "da_per_path", "cpu_seconds"});
+        double ept_ttuv = 0, ept_ttuv_high = 0, ept_mean = 0, ept_mean_err = 0;
+        // Side by side (P_a = 1): EPT | EPT+VPT | EPT+VPT+DA.
+        gl::Image strip(3 * width, height);
+        int strip_slot = 0;
+        Json json;
+        std::printf("\n  %-18s %6s %11s %11s %9s %10s %19s %19s %9s %9s %7s %6s\n", "technique", "P_a", "ttuv", "ttuv_high",
+                    "speedup", "sp_high", "paper speedup", "paper sp_high", "mean", "rel.diff", "switch", "DA/pth");
+        for (const Technique& t : techniques) {
+            gl::HybridOptions opt;
+            opt.mode = t.mode;
+            opt.ept.max_events = full ? 4096 : 1024;
+            double Pa = 1.0;
+            if (t.optimal_pa) {
+                const gl::AcceptanceEstimate a =
+                    gl::estimate_optimal_acceptance(scene_ept, scene_vpt, agg, ctx, camera, int(spp), seed + 1, threads, opt, 10);
+                Pa = a.P_a;
+            }
+            opt.acceptance = Pa;
+            ProgressBar bar(t.name, std::uint64_t(height));
+            const gl::HybridImages img = gl::render_hybrid(scene_ept, scene_vpt, agg, ctx, camera, int(spp), seed, threads, opt, 1,
+                                                           [&](int n) { bar.advance(std::uint64_t(n)); });
+            bar.done();
+            const gl::Image all = img.combined();
+            const double mean = (all.mean(0) + all.mean(1) + all.mean(2)) / 3.0;
+            const double npx = double(width) * double(height);
+            const double mean_err = std::sqrt(img.var_total / (double(spp) * npx));
+            if (t.mode == gl::HybridMode::ept) {
+                ept_ttuv = img.ttuv();
+                ept_ttuv_high = img.ttuv_high();
+                ept_mean = mean;
+                ept_mean_err = mean_err;
+            }
+            const double speed = ept_ttuv / img.ttuv();
+            const double speed_high = img.ttuv_high() > 0 ? ept_ttuv_high / img.ttuv_high() : 0.0;
+            const double rel = (mean - ept_mean) / ept_mean;
+            const double rel_sigma = std::hypot(mean_err, t.mode == gl::HybridMode::ept ? 0.0 : ept_mean_err) / ept_mean;
+            const double paths = double(img.counters.paths);
+            const double sw_frac = (double(img.counters.switched) + double(img.counters.rejected)) / paths;
+            const double sw_depth = img.counters.switched ? double(img.counters.switch_depth) / double(img.counters.switched) : 0.0;
+            const double da = double(img.counters.da) / paths;
+            const double pmin = *std::min_element(t.paper_total, t.paper_total + 4), pmax = *std::max_element(t.paper_total, t.paper_total + 4);
+            const double hmin = *std::min_element(t.paper_high, t.paper_high + 4), hmax = *std::max_element(t.paper_high, t.paper_high + 4);
+            std::printf("  %-18s %6.3f %11.4g %11.4g %8.2fx %9.1fx %8.1f-%7.1fx %8.1f-%7.1fx %9.4f %+8.2f%% %6.2f %6.2f\n",
+                        t.name.c_str(), Pa, img.ttuv(), img.ttuv_high(), speed, speed_high, pmin, pmax, hmin, hmax, mean,
+                        100.0 * rel, sw_frac, da);
+            std::string file = t.name;
+            for (char& c : file) c = (c == ' ' || c == '+' || c == '=') ? '_' : char(std::tolower(c));
+            gl::write_exr(out / ("hybrid_" + file + ".exr"), all);
+            gl::write_png(out / ("hybrid_" + file + ".png"), all, {exposure});
+            gl::write_exr(out / ("hybrid_" + file + "_high.exr"), img.high.image());
+            if (!t.optimal_pa && strip_slot < 3) {
+                for (int y = 0; y < height; ++y)
+                    for (int x = 0; x < width; ++x)
+                        for (int c = 0; c < 3; ++c) strip.at(strip_slot * width + x, y, c) = all.at(x, y, c);
+                ++strip_slot;
+            }
+            csv.row_text({t.name, std::to_string(Pa), std::to_string(img.ttuv()), std::to_string(img.ttuv_high()),
+                          std::to_string(speed), std::to_string(speed_high), std::to_string(pmin), std::to_string(pmax),
+                          std::to_string(hmin), std::to_string(hmax), std::to_string(mean), std::to_string(rel),
+                          std::to_string(rel_sigma), std::to_string(sw_frac), std::to_string(sw_depth), std::to_string(da),
+                          std::to_string(img.cpu_seconds_low + img.cpu_seconds_high)});
+            std::string key = file;
+            json.num(key + "_ttuv", img.ttuv()).num(key + "_speedup", speed).num(key + "_rel_diff", rel).num(key + "_P_a", Pa);
+            if (t.mode != gl::HybridMode::ept)
+                std::printf("  %18s rel. diff %+.2f%% +- %.2f%% (1 sigma, MC of both), %.2f grain interactions in EPT before the "
+                            "switch\n",
+                            "", 100.0 * rel, 100.0 * rel_sigma, sw_depth);
+        }
+        std::printf("  (paper: Table 2 speedups over EPT across SPICES, SANDCASTLE, SNOWMAN LG./SM.; ttuv in CPU seconds x "
+                    "variance, our units: scene radiance^2 x core-seconds)\n");
+        gl::write_exr(out / "hybrid_side_by_side.exr", strip);
+        gl::write_png(out / "hybrid_side_by_side.png", strip, {exposure});
+        csv.write(out / "meng15_hybrid_convergence.csv");
+        plot_with_matplotlib(out / "meng15_hybrid_convergence.py",
+                             "d = read_csv(r'''" + (out / "meng15_hybrid_convergence.csv").string() +
+                                 "''')\n"
+                                 "names = d['technique'][1:]\n"
+                                 "x = np.arange(len(names))\n"
+                                 "fig, ax = plt.subplots(1, 2, figsize=(11, 4))\n"
+                                 "for k, (col, lo, hi, title) in enumerate([('speedup', 'paper_speedup_min', 'paper_speedup_max', 'combined'),"
+                                 " ('speedup_high', 'paper_speedup_high_min', 'paper_speedup_high_max', 'high order')]):\n"
+                                 "    ours = np.array(d[col][1:]); pl = np.array(d[lo][1:]); ph = np.array(d[hi][1:])\n"
+                                 "    ax[k].bar(x - 0.2, ours, 0.4, label='ours')\n"
+                                 "    ax[k].bar(x + 0.2, np.sqrt(pl * ph), 0.4, yerr=[np.sqrt(pl * ph) - pl, ph - np.sqrt(pl * ph)], "
+                                 "label='Meng15 Table 2 (range over scenes)', alpha=0.6)\n"
+                                 "    ax[k].set_yscale('log'); ax[k].set_xticks(x); ax[k].set_xticklabels(names, rotation=20, fontsize=8)\n"
+                                 "    ax[k].set_title('ttuv speedup over EPT, ' + title); ax[k].legend(fontsize=8)\n"
+                                 "fig.tight_layout(); fig.savefig(png, dpi=110)\n",
+                             out / "meng15_hybrid_convergence.png");
+        std::printf("wrote %s/hybrid_*.{exr,png} (hybrid_side_by_side: EPT | EPT+VPT | EPT+VPT+DA), meng15_hybrid_convergence.{csv,png}\n", out.c_str());
+        json.num("d_DA", diffusion.d_DA).integer("spp", (long long)spp);
+        std::cout << json.str() << std::endl;
+        return 0;
+    });
+}
