@@ -1,0 +1,177 @@
+// Point-based renderer (Wang18 Eqs. 5, 6, 9, 10) against the library's VPT restricted, through
+// walk-kernel callbacks, to paths with exactly one (single) or exactly two (double) scattering
+// events: a glass sphere (eta 1.33) filled with a homogeneous HG medium under a quad light.
+// Both include Fresnel transmission and internal reflections on the light and camera sides.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "scene_fixture.hpp"
+
+using namespace pb_test;
+
+namespace {
+
+// Four independent point-based renderers (different light-sample seeds): their spread is the
+// honest error of the point-based estimate (one renderer's samples are shared by all rays).
+const std::vector<Renderer>& single_renderers() {
+    static const std::vector<Renderer> r = [] {
+        std::vector<Renderer> v;
+        for (std::uint64_t k = 0; k < 4; ++k) {
+            PointBasedOptions<float> o;
+            o.volume_step = 0.1f;
+            o.light_samples = 8;
+            o.light_bounces = 2;
+            o.max_optical_depth = 6.0f;
+            o.double_ = false;
+            o.multiple = false;
+            Rng rng = Rng::from_key(42, k);
+            v.emplace_back(medium(), kEta, sphere(), sphere_surface_samples(sphere(), 8000),
+                           Light<float, Grey>::quad_light(quad(), Grey(1.0f)), o, rng);
+        }
+        return v;
+    }();
+    return r;
+}
+
+const Renderer& double_renderer() {
+    static const Renderer r = [] {
+        PointBasedOptions<float> o;
+        o.volume_step = 0.1f;
+        o.light_samples = 2;
+        o.light_bounces = 2;
+        o.max_optical_depth = 6.0f;
+        o.k_max = 16;
+        o.single = false;
+        o.multiple = false;
+        o.cut.eps1 = 0.02f;
+        o.cut.eps2 = 0.002f;
+        Rng rng = Rng::from_key(43);
+        return Renderer(medium(), kEta, sphere(), sphere_surface_samples(sphere(), 3000),
+                        Light<float, Grey>::quad_light(quad(), Grey(1.0f)), o, rng);
+    }();
+    return r;
+}
+
+// Mean and standard error of a point-based component over `n` random rays of a patch (the
+// camera samples of Eq. 10 are jittered per ray).
+template <class Get>
+void pb_patch(const Renderer& r, Vec2f c, float h, int n, Get&& get, double& mean, double& se) {
+    Welford w;
+    for (int i = 0; i < n; ++i) {
+        Rng rng = Rng::from_key(7, std::uint64_t(i));
+        const Ray<float> ray = patch_ray(c, h, rng);
+        w.add(double(get(r.radiance_components(ray, rng))));
+    }
+    mean = w.mean();
+    se = w.standard_error();
+}
+
+}  // namespace
+
+TEST_CASE("point_based: single scattering (Eq. 5) matches VPT with exactly one event", "[point_based]") {
+    const SceneT scene = vpt_scene();
+    const auto& rs = single_renderers();
+    const float h = 0.1f;
+    for (const auto& c : {Vec2f(0.0f, 0.0f), Vec2f(0.0f, 0.6f), Vec2f(0.5f, -0.4f), Vec2f(-0.6f, 0.2f)}) {
+        double mean, se;
+        vpt_exact(scene, c, h, 1, false, 100000, 11, mean, se);
+        Welford builds;
+        for (const auto& r : rs) {
+            double m, s;
+            pb_patch(r, c, h, 64, [](const auto& k) { return k.single[0]; }, m, s);
+            builds.add(m);
+        }
+        const double pb = builds.mean(), pb_se = builds.standard_error();
+        const double tol = 4 * std::hypot(se, pb_se) + 0.03 * mean;  // 3 %: box-kernel bias
+        std::printf("single (%.1f, %.1f): pb %.5f +- %.5f vpt %.5f +- %.5f\n", c.x, c.y, pb, pb_se, mean, se);
+        INFO("patch (" << c.x << ", " << c.y << "): point-based " << pb << " +- " << pb_se << ", VPT " << mean
+                       << " +- " << se);
+        CHECK(std::abs(pb - mean) < tol);
+        CHECK(tol < 0.15 * mean);  // sharp enough to catch e.g. a missing 1/eta^2 or Fresnel factor
+    }
+}
+
+TEST_CASE("point_based: double scattering (Eq. 6, Alg. 1 cut) matches VPT with exactly two events",
+          "[point_based]") {
+    // Eq. 6 connects the two scattering events by a straight segment: the VPT reference kills
+    // paths with a boundary reflection between them (those belong to the bounced term, Eq. 8).
+    const SceneT scene = vpt_scene();
+    const auto& r = double_renderer();
+    const float h = 0.1f;
+    for (const auto& c : {Vec2f(0.0f, 0.0f), Vec2f(0.3f, 0.6f), Vec2f(-0.5f, -0.4f)}) {
+        double mean, se, pb, pb_se;
+        vpt_exact(scene, c, h, 2, true, 100000, 12, mean, se);
+        pb_patch(r, c, h, 32, [](const auto& k) { return k.double_[0]; }, pb, pb_se);
+        const double tol = 4 * std::hypot(se, pb_se) + 0.02 * mean;
+        std::printf("double (%.1f, %.1f): pb %.5f +- %.5f vpt %.5f +- %.5f\n", c.x, c.y, pb, pb_se, mean, se);
+        INFO("patch (" << c.x << ", " << c.y << "): point-based " << pb << " +- " << pb_se << ", VPT " << mean
+                       << " +- " << se);
+        CHECK(std::abs(pb - mean) < tol);
+        CHECK(tol < 0.15 * mean);
+    }
+}
+
+TEST_CASE("point_based: the tree cut with zero threshold equals the brute-force sum; coarse cuts stay close",
+          "[point_based]") {
+    const auto& r = double_renderer();
+    const Vec3f omega = glm::normalize(Vec3f(0.1f, -0.2f, -1.0f));
+    for (const Vec3f P : {Vec3f(0.0f, 0.3f, 0.2f), Vec3f(-0.5f, -0.2f, 0.4f)}) {
+        // Brute force: every volume sample individually, written out here (Eq. 6).
+        const MediumT m = medium();
+        double brute = 0;
+        for (const auto& it : r.volume_tree().items()) {
+            const Vec3f rv = P - it.p;
+            const float d = glm::length(rv);
+            const Vec3f rh = rv / d;
+            brute += double(m.sigma_s()[0]) * m.sigma_s()[0] * it.w[0] * std::exp(-kSigmaT * d) *
+                     Renderer::inverse_square_ball(d, r.volume_step()) * m.phase().eval(it.d, rh).value[0] *
+                     m.phase().eval(rh, -omega).value[0];
+        }
+        Grey dbl(0.0f), mul(0.0f), dbl_cut(0.0f), dbl_two(0.0f);
+        r.gather_point_brute_force(P, omega, dbl, mul);
+        CHECK(dbl[0] == Approx(brute).epsilon(1e-4));
+        r.gather_point(P, omega, dbl_cut, mul);
+        CHECK(dbl_cut[0] == Approx(brute).epsilon(0.05));  // Alg. 1 with eps1 = 0.02 sr
+        r.gather_point(P, omega, dbl_two, mul, CutCriterion<float>{0.02f, 0.002f, pi_v<float> / 4}, 3);
+        CHECK(dbl_two[0] == Approx(dbl_cut[0]).epsilon(1e-5));  // two-step traversal: same cut
+    }
+}
+
+TEST_CASE("point_based: the 1/r^2 ball average has the right limits", "[point_based]") {
+    // Closed forms: at the centre 3 / R^2 (4 pi R / (4/3 pi R^3)); far away 1 / r^2.
+    CHECK(Renderer::inverse_square_ball(0.0f, 0.5f) == Approx(3.0 / 0.25).epsilon(1e-5));
+    CHECK(Renderer::inverse_square_ball(4.99f, 0.5f) == Approx(1.0 / (4.99 * 4.99)).epsilon(0.004));
+    CHECK(Renderer::inverse_square_ball(1.4f, 0.5f) > 1.0f / (1.4f * 1.4f));  // convexity of 1/r^2
+    CHECK(Renderer::inverse_square_ball(0.5f, 0.5f) == Approx(1.5 / 0.25).epsilon(1e-4));
+}
+
+TEST_CASE("point_based: bad input", "[point_based]") {
+    Rng rng = Rng::from_key(1);
+    const auto light = Light<float, Grey>::quad_light(quad(), Grey(1.0f));
+    const auto surf = sphere_surface_samples(sphere(), 50);
+    PointBasedOptions<float> o;
+    CHECK_THROWS_AS(Renderer(medium(), -1.0f, sphere(), surf, light, o, rng), grainlight::invalid_argument);
+    CHECK_THROWS_AS(Renderer(MediumT(0.0f, 0.5f, Phase(0.0f)), kEta, sphere(), surf, light, o, rng),
+                    grainlight::invalid_argument);
+    CHECK_THROWS_AS(Renderer(medium(), kEta, sphere(), {}, light, o, rng), grainlight::invalid_argument);
+    o.k_max = 0;
+    CHECK_THROWS_AS(Renderer(medium(), kEta, sphere(), surf, light, o, rng), grainlight::invalid_argument);
+    CHECK_THROWS_AS(sphere_surface_samples(sphere(), 0), grainlight::invalid_argument);
+    // A table for another albedo is refused.
+    MsTableOptions t;
+    t.n_rho = 2;
+    t.n_z = 2;
+    t.n_theta = 2;
+    t.n_phi = 1;
+    t.photons = 100;
+    const auto table = MsTable<1>::build(Phase(kG), Grey(0.5f), t);
+    o.k_max = 4;
+    CHECK_THROWS_AS(Renderer(medium(), kEta, sphere(), surf, light, o, rng, &table), grainlight::invalid_argument);
+    // A ray that misses the boundary gives 0.
+    const Renderer r(medium(), kEta, sphere(), surf, light, o, rng);
+    Rng r2 = Rng::from_key(2);
+    CHECK(r.radiance(Ray<float>(Vec3f(5, 5, 5), Vec3f(0, 0, 1)), r2)[0] == 0.0f);
+}
