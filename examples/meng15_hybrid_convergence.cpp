@@ -9,6 +9,7 @@
 //
 //   meng15_hybrid_convergence [--quality quick|full] [--out DIR] [--seed S] [--threads N]
 //                             [--spp N] [--radius R] [--absorption A] [--width W] [--exposure EV]
+//                             [--pa-estimator paper|moments]
 //
 // The effective medium comes from the virtual scatterometer of the same grain
 // (precompute/scatterometer.hpp, make_effective_medium). Writes EXR + PNG per technique, a CSV of
@@ -59,6 +60,7 @@ int main(int argc, char** argv) {
             .option("radius", "radius of the sphere of grains in grain radii", "20")
             .option("absorption", "interior absorption of the ice-like grains per grain radius (green)", "0.01")
             .option("width", "image width in pixels (height = 3/4 width; default 120 quick, 240 full)")
+            .option("pa-estimator", "paper (Eq. 8 with Eq. 6's variances) | moments (exact roulette variance)", "paper")
             .option("exposure", "PNG exposure in stops", "0");
         cli.finish();
         const bool full = cli.full_quality();
@@ -72,6 +74,9 @@ int main(int argc, char** argv) {
         const double absorption = cli.num("absorption", 0.01);
         if (!(absorption >= 0.0 && absorption <= 1.0)) throw cli_error("--absorption must be in [0, 1]");
         const double exposure = cli.num("exposure", 0.0);
+        const std::string pa_estimator = cli.str("pa-estimator", "paper");
+        if (pa_estimator != "paper" && pa_estimator != "moments")
+            throw cli_error("--pa-estimator = '" + pa_estimator + "' must be paper or moments");
         const std::uint64_t width_arg = cli.integer("width", full ? 240 : 120);
         if (width_arg < 8 || width_arg > 4096) throw cli_error("--width must be in [8, 4096]");
         const int width = int(width_arg), height = std::max(6, int(width_arg * 3 / 4));
@@ -150,7 +155,10 @@ int main(int argc, char** argv) {
             if (t.optimal_pa) {
                 const gl::AcceptanceEstimate a =
                     gl::estimate_optimal_acceptance(scene_ept, scene_vpt, agg, ctx, camera, int(spp), seed + 1, threads, opt, 10);
-                Pa = a.P_a;
+                Pa = pa_estimator == "paper" ? a.P_a : a.P_a_moments;
+                std::printf("  %-18s preview (every 10th pixel): V_L %.4g V_H %.4g t_L %.3g s t_H %.3g s -> P_a %.3f (Eq. 8), "
+                            "%.3f (moments)\n",
+                            t.name.c_str(), a.V_L, a.V_H, a.t_L, a.t_H, a.P_a, a.P_a_moments);
             }
             opt.acceptance = Pa;
             ProgressBar bar(t.name, std::uint64_t(height));

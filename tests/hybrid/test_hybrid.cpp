@@ -152,17 +152,18 @@ TEST_CASE("VPT -> DA: the DA connection deep inside a half-space returns the imp
     HybridDiffusion diff{{make(0), make(1), make(2)}, 0.0};
     for (const auto& d : diff.channel) diff.d_DA = std::max(diff.d_DA, d.switch_distance());
     const HybridContext<BoundaryDistance<HalfSpaceBoundary>> ctx{m, shape, {HalfSpaceBoundary{0.0}}, &diff};
-    for (double z : {diff.d_DA, 3.0 / sigma_t}) {
+    for (double z : {diff.d_DA, 3.0 / sigma_t})
+    for (bool multipole : {true, false}) {  // the 1000-thick "slab" of the multipole is semi-infinite here
         Mean acc[3];
         const Vec3d x(0.3, -0.2, -z);
         for (int i = 0; i < 60000; ++i) {
             Rng rng = Rng::from_key(17, std::uint64_t(i), std::uint64_t(z * 1000));
-            const RGB L = diffusion_radiance(scene, ctx, x, rng);
+            const RGB L = diffusion_radiance(scene, ctx, x, rng, multipole);
             for (int c = 0; c < 3; ++c) acc[c].add(double(L[std::size_t(c)]));
         }
         for (int c = 0; c < 3; ++c) {
             const double ref = diff.channel[std::size_t(c)].point_total(z);
-            INFO("z " << z << " channel " << c << ": DA " << acc[c].mean() << " +- " << acc[c].stderr_() << " vs closed form "
+            INFO("multipole " << multipole << " z " << z << " channel " << c << ": DA " << acc[c].mean() << " +- " << acc[c].stderr_() << " vs closed form "
                       << ref);
             REQUIRE(std::abs(acc[c].mean() - ref) < 4 * acc[c].stderr_() + 2e-3);
             REQUIRE(acc[c].stderr_() < 0.02 * ref + 1e-3);
@@ -213,8 +214,9 @@ TEST_CASE("Hybrid furnace: lossless grains under a constant sky return 1 with EP
 
 TEST_CASE("Hybrid vs EPT: exact agreement without switching; EPT -> VPT within the effective-medium error",
           "[hybrid][ept]") {
-    // Absorbing glass grains (interior sigma_a per bounding radius; grain albedo ~0.8-0.95) in a
-    // sphere of radius 6 R under a constant sky.
+    // Absorbing glass grains (interior sigma_a per bounding radius) in a sphere of radius 6 (~50
+    // grain radii: the RSA tile of 40 spheres at f = 0.3 in a unit box has R ~ 0.12) under a
+    // constant sky.
     const PeriodicTile tile = tile_f30(13);
     const double Rb = 6.0;
     const SphereBoundary shape(Vec3d(0.0), Rb);

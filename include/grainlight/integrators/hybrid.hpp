@@ -28,9 +28,10 @@
 ///   - VPT -> DA (Sec. 5, App. A): at a VPT scattering vertex x with distance to the boundary
 ///     >= d_DA = min(1 / sigma_t', 0.5 / sigma_tr) (the largest over the colour channels), the
 ///     path samples a uniform direction from x, finds the boundary point x_s (normal N_s), and
-///     moves there with the weight of the semi-infinite improved-diffusion point-source profile
-///     R_p(r; z) (z, r: depth of x below and offset along the tangent plane of x_s) divided by the
-///     area pdf of x_s, i.e. 4 pi |x_s - x|^2 / |cos theta_s|. At x_s it gathers the incident
+///     moves there with the weight of the improved-diffusion point-source profile R_p(r; z)
+///     (z, r: depth of x below and offset along the tangent plane of x_s; multipole of a slab of
+///     thickness z_r + z_a from an auxiliary ray along -omega_i as in App. A, or the
+///     semi-infinite dipole) divided by the area pdf of x_s, i.e. 4 pi |x_s - x|^2 / |cos theta_s|. At x_s it gathers the incident
 ///     radiance like a white Lambertian vertex (NEE with MIS, then a cosine-sampled direction out
 ///     of the medium): Meng15 "sample the direct illumination at x_i ... we resume VPT from x_i".
 ///     Why R_p: by reciprocity the mean radiance phi / 4 pi at x due to irradiance E on the
@@ -70,6 +71,7 @@
 #include "grainlight/core/statistics.hpp"
 #include "grainlight/core/warp.hpp"
 #include "grainlight/diffusion/improved.hpp"
+#include "grainlight/diffusion/multipole.hpp"
 #include "grainlight/integrators/ept.hpp"
 #include "grainlight/integrators/render.hpp"
 #include "grainlight/integrators/vpt.hpp"
@@ -144,6 +146,9 @@ struct HybridOptions {
     EptOptions ept{};               ///< EPT part (events budget, roulette, NEE)
     VptOptions vpt{};               ///< VPT part (depth, roulette, NEE)
     int max_da_restarts = 64;       ///< DA connections per path at most
+    /// DA with the finite-slab multipole of Meng15 App. A (thickness z_r + z_a from an auxiliary
+    /// ray along -omega_i); false: the semi-infinite improved-diffusion dipole.
+    bool multipole = true;
     bool measure_time = false;      ///< time the EPT and VPT/DA parts (for P_a and ttuv)
 
     /// Throws grainlight::invalid_argument for out-of-range fields.
@@ -253,14 +258,18 @@ struct HybridVptCallbacks {
 
 }  // namespace detail
 
-/// One DA connection from the interior point x (Meng15 App. A, semi-infinite improved
-/// diffusion): a uniform direction from x to the boundary point x_s (which must be the boundary
-/// shape `ctx.boundary_shape` of `scene`), weight R_p(r; z) 4 pi |x_s - x|^2 / |cos theta_s| per
-/// channel. On success returns true and fills `hit` (x_s, outward normal) and `weight`.
+/// One DA connection from the interior point x (Meng15 App. A): a uniform direction omega_i from
+/// x to the boundary point x_s (which must be the boundary shape `ctx.boundary_shape` of
+/// `scene`), weight R_p(r; z_r) 4 pi |x_s - x|^2 / |cos theta_s| per channel, with z_r, r the
+/// depth of x below and its offset along the tangent plane of x_s. R_p: with `multipole`, the
+/// improved-diffusion multipole of a slab of thickness d = z_r + z_a (z_a: depth of x below the
+/// tangent plane at x_a, the boundary hit of an auxiliary ray along -omega_i), else the
+/// semi-infinite improved dipole (also when the auxiliary ray misses the boundary). On success
+/// returns true and fills `hit` (x_s, outward normal) and `weight`.
 template <LitScene Scene, class Distance>
 [[nodiscard]] bool sample_diffusion_connection(const Scene& scene, const HybridContext<Distance>& ctx, const Vec3d& x,
                                                Rng& rng, SurfaceHit<typename Scene::Float, typename Scene::Spectrum>& hit,
-                                               typename Scene::Spectrum& weight) noexcept {
+                                               typename Scene::Spectrum& weight, bool multipole = true) noexcept {
     using F = typename Scene::Float;
     using S = typename Scene::Spectrum;
     const Vec3d w = sample_uniform_sphere(rng.uniform2<double>());
@@ -273,10 +282,25 @@ template <LitScene Scene, class Distance>
     const double z = dist * c;  // depth of x below the tangent plane of x_s
     const double r = std::sqrt(std::max(0.0, dist * dist - z * z));
     const double inv_pdf_area = 4.0 * pi_v<double> * dist * dist / c;
+    double thickness = std::numeric_limits<double>::infinity();
+    if (multipole) {
+        const SurfaceHit<F, S> ha = scene.intersect(Ray<F>(Vec3<F>(x), Vec3<F>(-w)));
+        if (ha.hit() && ha.shape == ctx.boundary_shape) {
+            const double z_a = glm::dot(Vec3d(ha.p) - x, glm::normalize(Vec3d(ha.n)));
+            if (z_a > 0.0) thickness = z + z_a;
+        }
+    }
     weight = S(F(0));
     for (std::size_t ch = 0; ch < S::size; ++ch) {
         const auto& d = ctx.diffusion->channel[std::min<std::size_t>(ch, 2)];
-        weight[ch] = F(d.point_R(r, z) * inv_pdf_area);
+        double Rp;
+        if (std::isfinite(thickness)) {
+            const MultipoleSlab<double> slab(d.sigma_s_prime(), d.sigma_a(), 1.0, thickness, DiffusionModel::improved);
+            Rp = slab.point_R(r, z);
+        } else {
+            Rp = d.point_R(r, z);
+        }
+        weight[ch] = F(Rp * inv_pdf_area);
     }
     return true;
 }
@@ -342,7 +366,7 @@ template <LitScene Scene, class Distance>
         // Lambertian vertex (NEE + MIS), leave the medium along a cosine-sampled direction.
         SurfaceHit<F, S> h;
         S w;
-        if (!sample_diffusion_connection(scene_vpt, ctx, cb.da_x, rng, h, w)) break;
+        if (!sample_diffusion_connection(scene_vpt, ctx, cb.da_x, rng, h, w, opt.multipole)) break;
         st.throughput *= w;
         if (st.throughput.is_black()) break;
         const Vec3<F> n = glm::normalize(h.n);
@@ -372,11 +396,13 @@ template <LitScene Scene, class Distance>
 template <LitScene Scene, class Distance>
     requires PhaseMedium<typename Scene::Medium>
 [[nodiscard]] typename Scene::Spectrum diffusion_radiance(const Scene& scene_vpt, const HybridContext<Distance>& ctx,
-                                                          const Vec3d& x, Rng& rng, const VptOptions& vopt = {}) noexcept {
+                                                          const Vec3d& x, Rng& rng, bool multipole = true,
+                                                          const VptOptions& vopt = {}) noexcept {
     using S = typename Scene::Spectrum;
     using F = typename Scene::Float;
     HybridOptions opt;
     opt.mode = HybridMode::ept_vpt_da;
+    opt.multipole = multipole;
     opt.vpt = vopt;
     // A continuation whose first vertex is x with unit weight: undo the albedo of the first event.
     S beta(F(1));
@@ -687,6 +713,7 @@ struct HybridImages {
     int spp = 0;                    ///< bundles per pixel
     double var_total = 0;           ///< mean over pixels of the sample variance of one bundle estimate (channel mean)
     double var_low = 0, var_high = 0;
+    double m2_high = 0;             ///< mean over pixels of the second moment E[H^2] of the high-order part
     double cpu_seconds_low = 0, cpu_seconds_high = 0;  ///< summed over threads
     HybridCounters counters{};
     [[nodiscard]] Image combined() const {
@@ -733,7 +760,7 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
     const int N = opt.bundle_size;
     HybridImages img{Film(w, h), Film(w, h), spp};
     struct RowStats {
-        double var_t = 0, var_l = 0, var_h = 0, sec_l = 0, sec_h = 0;
+        double var_t = 0, var_l = 0, var_h = 0, m2_h = 0, sec_l = 0, sec_h = 0;
         HybridCounters c{};
     };
     std::vector<RowStats> rows(static_cast<std::size_t>(h));
@@ -771,6 +798,7 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
             rs.var_t += wt.variance();
             rs.var_l += wl.variance();
             rs.var_h += wh.variance();
+            rs.m2_h += wh.variance() + wh.mean() * wh.mean();
         }
         progress(1);
     }
@@ -778,6 +806,7 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
         img.var_total += rs.var_t;
         img.var_low += rs.var_l;
         img.var_high += rs.var_h;
+        img.m2_high += rs.m2_h;
         img.cpu_seconds_low += rs.sec_l;
         img.cpu_seconds_high += rs.sec_h;
         img.counters.merge(rs.c);
@@ -786,6 +815,7 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
     img.var_total /= np;
     img.var_low /= np;
     img.var_high /= np;
+    img.m2_high /= np;
     return img;
 }
 
@@ -794,7 +824,12 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
 /// sample per pixel) and P_a of Eq. 8.
 struct AcceptanceEstimate {
     double V_L = 0, V_H = 0, t_L = 0, t_H = 0;
-    double P_a = 1;
+    double P_a = 1;  ///< Eq. 8 (Meng15)
+    /// Eq. 8 with the exact variance of the roulette estimator L + H 1{u < P_a} / P_a:
+    /// Var = (V - E[H^2]) + E[H^2] / P_a (V = total variance at P_a = 1), i.e. Eq. 8 with
+    /// V_L -> V - E[H^2], V_H -> E[H^2]. Eq. 6 neglects (1 / P_a - 1) E[H]^2 and the low/high
+    /// covariance; this one does not.
+    double P_a_moments = 1;
 };
 
 /// Estimate the optimal acceptance probability (Eq. 8) from a preview render of every
@@ -815,6 +850,7 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera>
     a.t_L = pv.cpu_seconds_low / np;
     a.t_H = pv.cpu_seconds_high / np;
     a.P_a = optimal_acceptance(a.V_L, a.V_H, a.t_L, a.t_H);
+    a.P_a_moments = optimal_acceptance(pv.var_total - pv.m2_high, pv.m2_high, a.t_L, a.t_H);
     return a;
 }
 
