@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
                 "Meng15 Table 2: time to unit variance of EPT, EPT+VPT and EPT+VPT+DA (P_a = 1 and Eq. 8)");
         cli.common_options("out/meng15_hybrid_convergence")
             .option("spp", "bundles of 16 paths per pixel (>= 2; default 2 quick, 8 full)")
-            .option("radius", "radius of the sphere of grains in grain radii", "20")
+            .option("radius", "radius of the sphere of grains in grain radii (default 20 quick, 40 full)")
             .option("absorption", "interior absorption of the ice-like grains per grain radius (green)", "0.01")
             .option("width", "image width in pixels (height = 3/4 width; default 120 quick, 240 full)")
             .option("pa-estimator", "paper (Eq. 8 with Eq. 6's variances) | moments (exact roulette variance)", "paper")
@@ -69,7 +69,7 @@ int main(int argc, char** argv) {
         const std::uint64_t seed = cli.seed();
         const std::uint64_t spp = cli.integer("spp", full ? 8 : 2);
         if (spp < 2 || spp > 4096) throw cli_error("--spp must be in [2, 4096] (ttuv needs a sample variance)");
-        const double Rb = cli.num("radius", 20.0);
+        const double Rb = cli.num("radius", full ? 40.0 : 20.0);
         if (!(Rb >= 4.0 && Rb <= 200.0)) throw cli_error("--radius must be in [4, 200] grain radii");
         const double absorption = cli.num("absorption", 0.01);
         if (!(absorption >= 0.0 && absorption <= 1.0)) throw cli_error("--absorption must be in [0, 1]");
