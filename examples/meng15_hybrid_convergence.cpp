@@ -206,10 +206,19 @@ int main(int argc, char** argv) {
                           std::to_string(img.cpu_seconds_low + img.cpu_seconds_high)});
             std::string key = file;
             json.num(key + "_ttuv", img.ttuv()).num(key + "_speedup", speed).num(key + "_rel_diff", rel).num(key + "_P_a", Pa);
-            if (t.mode != gl::HybridMode::ept)
+            if (t.mode != gl::HybridMode::ept) {
                 std::printf("  %18s rel. diff %+.2f%% +- %.2f%% (1 sigma, MC of both), %.2f grain interactions in EPT before the "
                             "switch\n",
                             "", 100.0 * rel, 100.0 * rel_sigma, sw_depth);
+                if (!t.optimal_pa) {
+                    // Eq. 8 with this full render's own statistics (what a perfect preview would give).
+                    const double np = npx * double(spp);
+                    const double tl = img.cpu_seconds_low / np, th = img.cpu_seconds_high / np;
+                    std::printf("  %18s full-image V_L %.4g V_H %.4g t_L %.3g s t_H %.3g s -> Eq. 8 P_a %.3f, moments %.3f\n", "",
+                                img.var_low, img.var_high, tl, th, gl::optimal_acceptance(img.var_low, img.var_high, tl, th),
+                                gl::optimal_acceptance(img.var_total - img.m2_high, img.m2_high, tl, th));
+                }
+            }
         }
         std::printf("  (paper: Table 2 speedups over EPT across SPICES, SANDCASTLE, SNOWMAN LG./SM.; ttuv in CPU seconds x "
                     "variance, our units: scene radiance^2 x core-seconds)\n");

@@ -39,8 +39,9 @@
 ///     when int R_p dA = 1).
 ///   - Time to unit variance (Sec. 6): `render_hybrid` records per pixel the sample variance of
 ///     the bundle estimates (total, low-order = EPT part, high-order = VPT/DA part) and the CPU
-///     time of the two parts; ttuv = (mean pixel variance of one bundle sample) x (CPU seconds per
-///     bundle sample per pixel).
+///     time of the two parts (the thread CPU time of each image row, split in the ratio of the
+///     parts' steady-clock times inside the bundles); ttuv = (mean pixel variance of one bundle
+///     sample) x (CPU seconds of a one-bundle-per-pixel image).
 ///
 /// Mode `HybridMode::ept` evaluates the same criterion but never switches: contributions after
 /// the would-be switch go to the high-order image, and every path is bit-identical to
@@ -84,8 +85,23 @@
 #if defined(_OPENMP)
 #include <omp.h>
 #endif
+#if defined(__unix__) || defined(__APPLE__)
+#include <time.h>
+#endif
 
 namespace grainlight {
+
+namespace detail {
+/// CPU seconds consumed by the calling thread (POSIX CLOCK_THREAD_CPUTIME_ID; elsewhere the
+/// steady clock). Unlike wall time it does not grow when other processes share the cores.
+[[nodiscard]] inline double thread_cpu_seconds() noexcept {
+#if defined(CLOCK_THREAD_CPUTIME_ID)
+    timespec ts{};
+    if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts) == 0) return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+#endif
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+}  // namespace detail
 
 // ---------------------------------------------------------------------------------------------
 // Distance to the boundary (VPT -> DA criterion)
@@ -714,7 +730,7 @@ struct HybridImages {
     double var_total = 0;           ///< mean over pixels of the sample variance of one bundle estimate (channel mean)
     double var_low = 0, var_high = 0;
     double m2_high = 0;             ///< mean over pixels of the second moment E[H^2] of the high-order part
-    double cpu_seconds_low = 0, cpu_seconds_high = 0;  ///< summed over threads
+    double cpu_seconds_low = 0, cpu_seconds_high = 0;  ///< thread CPU seconds, summed over threads
     HybridCounters counters{};
     [[nodiscard]] Image combined() const {
         Image a = low.image();
@@ -770,6 +786,8 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
 #endif
     for (int y = 0; y < h; ++y) {
         RowStats& rs = rows[std::size_t(y)];
+        const double cpu0 = detail::thread_cpu_seconds();
+        double wall_l = 0, wall_h = 0;
         std::array<Ray<F>, 64> rays;
         std::array<Rng, 64> rngs;
         for (int x = 0; x < w; ++x) {
@@ -791,8 +809,8 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
                 wl.add(double(lo.average()));
                 wh.add(double(hi.average()));
                 wt.add(double(lo.average()) + double(hi.average()));
-                rs.sec_l += b.seconds_low;
-                rs.sec_h += b.seconds_high;
+                wall_l += b.seconds_low;
+                wall_h += b.seconds_high;
                 rs.c.merge(b.counters);
             }
             rs.var_t += wt.variance();
@@ -800,6 +818,12 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
             rs.var_h += wh.variance();
             rs.m2_h += wh.variance() + wh.mean() * wh.mean();
         }
+        // The row's thread CPU time, split between the two parts in the ratio of their
+        // steady-clock times measured inside the bundles.
+        const double cpu = std::max(0.0, detail::thread_cpu_seconds() - cpu0);
+        const double wall = wall_l + wall_h;
+        rs.sec_l = wall > 0 ? cpu * wall_l / wall : cpu;
+        rs.sec_h = wall > 0 ? cpu * wall_h / wall : 0.0;
         progress(1);
     }
     for (const RowStats& rs : rows) {
