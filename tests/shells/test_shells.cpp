@@ -308,6 +308,30 @@ TEST_CASE("ShellMedium meets the Medium concept: weights carry the absorption", 
     double esc = 0;
     for (int i = 0; i < n; ++i) esc += m.sample_interaction(ray, 0.8, rng).kind == EventKind::escape;
     CHECK(std::abs(esc / n - m.attenuation(0.8)) < 4 * std::sqrt(0.25 / n));
+    // NEE densities are normalized: the integral of p_r(y) over the shell is p_scattered, the
+    // integral of p_r(omega' | y) over projected solid angle is 1 (midpoint sums over the cells,
+    // exact for the piecewise-constant table).
+    for (int i = 0; i < int(t.n_shells()); ++i) {
+        double pos = 0;
+        const double rr = t.radii[std::size_t(i)];
+        for (int j = 0; j < t.n_c; ++j) {
+            const double c = -1 + (j + 0.5) * 2.0 / t.n_c;
+            pos += m.exit_position_density(i, c) * 2 * pi_v<double> * rr * rr * 2.0 / t.n_c;
+            if (j % 7 != 3) continue;
+            double dir = 0;
+            for (int a = 0; a < t.n_u; ++a)
+                for (int b = 0; b < t.n_v; ++b)
+                    dir += m.exit_direction_density(i, ShellCoords<double>{c, (a + 0.5) / t.n_u, (b + 0.5) / t.n_v}) *
+                           pi_v<double> / (t.n_u * t.n_v);
+            CHECK(dir == Approx(1.0).epsilon(1e-9));
+        }
+        CHECK(pos == Approx(t.p_scattered[std::size_t(i)]).epsilon(1e-9));
+    }
+    // Float / RGB instantiation gives the same kind of events.
+    ShellMedium<float, RGB> mf(t);
+    const auto itf = mf.sample_interaction(Ray<float>(Vec3f(0), Vec3f(0, 0, 1)), 10.0f, rng);
+    CHECK((itf.kind == EventKind::null || itf.kind == EventKind::scatter));
+    CHECK(mf.attenuation(1.0f) == Approx(m.attenuation(1.0)).epsilon(1e-5));
     // The sampled direction pdf equals exit_direction_density * cos on the sampled exit.
     Vec3d y, w;
     double pdf = 0;
