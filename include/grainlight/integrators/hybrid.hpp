@@ -452,14 +452,14 @@ struct HybridBundleResult {
     HybridCounters counters{};
     /// Mean over the bundle's paths of the low / high / total radiance.
     [[nodiscard]] S mean_low() const noexcept {
-        S s(0.0f);
+        S s(typename S::value_type(0));
         for (int i = 0; i < n; ++i) s += path[std::size_t(i)].low;
-        return s / float(n);
+        return s / typename S::value_type(n);
     }
     [[nodiscard]] S mean_high() const noexcept {
-        S s(0.0f);
+        S s(typename S::value_type(0));
         for (int i = 0; i < n; ++i) s += path[std::size_t(i)].high;
-        return s / float(n);
+        return s / typename S::value_type(n);
     }
 };
 
@@ -683,7 +683,7 @@ template <LitScene Scene, BoundaryShape Shape, class Distance>
                 }
                 ++res.counters.switched;
                 res.counters.switch_depth += std::uint64_t(res.path[std::size_t(i)].switch_order);
-                const S beta = q.beta / float(opt.acceptance);
+                const S beta = q.beta / typename S::value_type(opt.acceptance);
                 const auto th0 = opt.measure_time ? Clock::now() : Clock::time_point{};
                 res.path[std::size_t(i)].high +=
                     hybrid_vpt_continuation(scene_vpt, ctx, x_switch, q.d, beta, rng, opt, &res.counters);
