@@ -9,7 +9,7 @@
 //
 //   meng15_hybrid_convergence [--quality quick|full] [--out DIR] [--seed S] [--threads N]
 //                             [--spp N] [--radius R] [--absorption A] [--width W] [--exposure EV]
-//                             [--pa-estimator paper|moments]
+//                             [--pa-estimator paper|moments] [--preview-stride K]
 //
 // The effective medium comes from the virtual scatterometer of the same grain
 // (precompute/scatterometer.hpp, make_effective_medium). Writes EXR + PNG per technique, a CSV of
@@ -61,6 +61,7 @@ int main(int argc, char** argv) {
             .option("absorption", "interior absorption of the ice-like grains per grain radius (green)", "0.01")
             .option("width", "image width in pixels (height = 3/4 width; default 120 quick, 240 full)")
             .option("pa-estimator", "paper (Eq. 8 with Eq. 6's variances) | moments (exact roulette variance)", "paper")
+            .option("preview-stride", "P_a preview: every k-th pixel in x and y (Meng15: 10, i.e. 1% of the pixels)", "10")
             .option("exposure", "PNG exposure in stops", "0");
         cli.finish();
         const bool full = cli.full_quality();
@@ -74,6 +75,8 @@ int main(int argc, char** argv) {
         const double absorption = cli.num("absorption", 0.01);
         if (!(absorption >= 0.0 && absorption <= 1.0)) throw cli_error("--absorption must be in [0, 1]");
         const double exposure = cli.num("exposure", 0.0);
+        const std::uint64_t preview_stride = cli.integer("preview-stride", 10);
+        if (preview_stride < 1 || preview_stride > 100) throw cli_error("--preview-stride must be in [1, 100]");
         const std::string pa_estimator = cli.str("pa-estimator", "paper");
         if (pa_estimator != "paper" && pa_estimator != "moments")
             throw cli_error("--pa-estimator = '" + pa_estimator + "' must be paper or moments");
@@ -154,11 +157,12 @@ int main(int argc, char** argv) {
             double Pa = 1.0;
             if (t.optimal_pa) {
                 const gl::AcceptanceEstimate a =
-                    gl::estimate_optimal_acceptance(scene_ept, scene_vpt, agg, ctx, camera, int(spp), seed + 1, threads, opt, 10);
+                    gl::estimate_optimal_acceptance(scene_ept, scene_vpt, agg, ctx, camera, int(spp), seed + 1, threads, opt,
+                                                    int(preview_stride));
                 Pa = pa_estimator == "paper" ? a.P_a : a.P_a_moments;
-                std::printf("  %-18s preview (every 10th pixel): V_L %.4g V_H %.4g t_L %.3g s t_H %.3g s -> P_a %.3f (Eq. 8), "
+                std::printf("  %-18s preview (every %dth pixel): V_L %.4g V_H %.4g t_L %.3g s t_H %.3g s -> P_a %.3f (Eq. 8), "
                             "%.3f (moments)\n",
-                            t.name.c_str(), a.V_L, a.V_H, a.t_L, a.t_H, a.P_a, a.P_a_moments);
+                            t.name.c_str(), int(preview_stride), a.V_L, a.V_H, a.t_L, a.t_H, a.P_a, a.P_a_moments);
             }
             opt.acceptance = Pa;
             ProgressBar bar(t.name, std::uint64_t(height));
