@@ -303,3 +303,67 @@ TEST_CASE("Hybrid vs EPT: exact agreement without switching; EPT -> VPT within t
         REQUIRE(he.mean() > 0.1 * me[1].mean());
     }
 }
+
+TEST_CASE("Eq. 5: bundle spread and the switch criterion", "[hybrid][criterion]") {
+    // sigma_k = sqrt(1/N sum |x - mean|^2): points +-a on one axis give a; a regular tetrahedron
+    // of circumradius c gives c.
+    const Vec3d two[2] = {Vec3d(-3, 1, 2), Vec3d(1, 1, 2)};
+    REQUIRE(bundle_spread(two, 2) == Approx(2.0));
+    const double c = 1.7;
+    const Vec3d tet[4] = {c * glm::normalize(Vec3d(1, 1, 1)), c * glm::normalize(Vec3d(1, -1, -1)),
+                          c * glm::normalize(Vec3d(-1, 1, -1)), c * glm::normalize(Vec3d(-1, -1, 1))};
+    REQUIRE(bundle_spread(tet, 4) == Approx(c));
+    REQUIRE(bundle_spread(tet, 1) == 0.0);
+
+    // On the aggregate: tau -> 0 arms every bundle after its first round, so a path switches at the
+    // first grain hit allowed (after min_ept_interactions EPT interactions) unless that hit lies
+    // outside the boundary shape (grains stick out by up to R); a larger min_ept_interactions
+    // delays it; tau = inf without the single-path rule never switches.
+    const PeriodicTile tile = tile_f30(17);
+    const SphereBoundary shape(Vec3d(0.0), 6.0);
+    const GrainMaterial glass = GrainMaterial::make_dielectric(1.5);
+    GranularAggregate<SphereBoundary> agg(tile, VoxelizedBoundary<SphereBoundary>(shape, tile.side()),
+                                          {GrainExemplar::sphere(1.0, glass)}, {1.0}, 3);
+    ScatterometerConfig cfg;
+    cfg.rays = 20000;
+    const GrainStats stats = run_scatterometer(ScatterometerGrain::sphere(1.0, glass), cfg);
+    const Scenes sc = make_scenes(make_effective_medium<float, RGB>(stats, tile.packing_fraction(), tile.radius()), shape,
+                                  RGB(1.0f));
+    const HybridContext<BoundaryDistance<SphereBoundary>> ctx{sc.medium, sc.shape, {shape}, nullptr};
+    for (int min_ept : {1, 3}) {
+        HybridOptions opt;
+        opt.tau = 1e-9;
+        opt.min_ept_interactions = min_ept;
+        std::uint64_t switched = 0, first = 0;
+        for_each_bundle(40, 16, 6.0, 0.5, 51, [&](const Ray<float>* rays, Rng* rngs) {
+            const auto b = hybrid_bundle(sc.ept, sc.vpt, agg, ctx, rays, rngs, 16, opt);
+            for (int i = 0; i < 16; ++i)
+                if (b.path[std::size_t(i)].switched) {
+                    REQUIRE(b.path[std::size_t(i)].switch_order >= min_ept);
+                    first += b.path[std::size_t(i)].switch_order == min_ept;
+                }
+            switched += b.counters.switched;
+        });
+        INFO("min_ept " << min_ept << ": " << first << " of " << switched << " switched at the first allowed grain");
+        REQUIRE(switched > 100);
+        REQUIRE(double(first) > 0.8 * double(switched));
+    }
+    HybridOptions never;
+    never.tau = std::numeric_limits<double>::infinity();
+    never.switch_single = false;
+    std::uint64_t switched = 0;
+    for_each_bundle(20, 16, 6.0, 0.5, 52, [&](const Ray<float>* rays, Rng* rngs) {
+        switched += hybrid_bundle(sc.ept, sc.vpt, agg, ctx, rays, rngs, 16, never).counters.switched;
+    });
+    REQUIRE(switched == 0);
+    // Default tau = 4 grain radii switches later than tau -> 0 on average.
+    HybridOptions dflt;
+    std::uint64_t sw4 = 0, d4 = 0;
+    for_each_bundle(40, 16, 6.0, 0.5, 51, [&](const Ray<float>* rays, Rng* rngs) {
+        const auto b = hybrid_bundle(sc.ept, sc.vpt, agg, ctx, rays, rngs, 16, dflt);
+        sw4 += b.counters.switched;
+        d4 += b.counters.switch_depth;
+    });
+    REQUIRE(sw4 > 100);
+    REQUIRE(double(d4) / double(sw4) > 1.5);
+}
