@@ -257,10 +257,11 @@ public:
                 const Vec3<F> ey = glm::cross(dv, ex);
                 const F cz = glm::dot(to_cam, dv);
                 const F phi = std::atan2(std::abs(glm::dot(to_cam, ey)), glm::dot(to_cam, ex));
+                const std::size_t j = ms_->direction_bin(double(cz), double(phi));
                 S m;
                 for (std::size_t c = 0; c < S::size; ++c) {
                     const F st = sig_t[c];
-                    m[c] = F(ms_->eval(c, double(rho * st), double(z * st), double(cz), double(phi))) * st * st * st;
+                    m[c] = F(ms_->eval_bin(c, double(rho * st), double(z * st), j)) * st * st * st;
                 }
                 mul += sig_s * wv * m;
             }

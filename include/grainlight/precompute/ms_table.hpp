@@ -113,6 +113,7 @@ public:
         t.g_ = double(phase.mean_cosine()[0]);
         for (std::size_t c = 0; c < N; ++c) t.albedo_[c] = double(albedo[c]);
         t.photons_ = opt.photons;
+        t.set_derived();
         const std::size_t n_dir = std::size_t(opt.n_theta) * std::size_t(opt.n_phi);
         const std::size_t n_cell = std::size_t(opt.n_rho) * std::size_t(opt.n_z);
 
@@ -178,23 +179,32 @@ public:
     /// coordinates (rho, z) in mean free paths, for outgoing direction with cosine `cos_theta` to
     /// the axis and azimuth `phi` in [0, pi] to the radial direction. 0 outside the grid.
     [[nodiscard]] double eval(std::size_t c, double rho, double z, double cos_theta, double phi) const noexcept {
-        if (values_.empty() || !(rho >= 0) || rho > rho_max_ || z < z_min_ || z > z_max_) return 0.0;
+        if (values_.empty()) return 0.0;
+        return eval_bin(c, rho, z, direction_bin(cos_theta, phi));
+    }
+
+    /// Index of the direction bin of (cos_theta, phi) (nearest bin), for eval_bin: compute it once
+    /// for all channels.
+    [[nodiscard]] std::size_t direction_bin(double cos_theta, double phi) const noexcept {
         const double theta = std::acos(std::clamp(cos_theta, -1.0, 1.0));
         const std::size_t it = std::min<std::size_t>(n_theta_ - 1, std::size_t(theta / pi_v<double> * n_theta_));
         const std::size_t ip =
             std::min<std::size_t>(n_phi_ - 1, std::size_t(std::clamp(phi, 0.0, pi_v<double>) / pi_v<double> * n_phi_));
-        const std::size_t j = it * n_phi_ + ip;
-        const double fr = rho / rho_max_ * n_rho_ - 0.5, fz = (z - z_min_) / (z_max_ - z_min_) * n_z_ - 0.5;
+        return it * n_phi_ + ip;
+    }
+
+    /// As eval, with the direction bin j = direction_bin(cos_theta, phi) (bilinear in rho, z).
+    [[nodiscard]] double eval_bin(std::size_t c, double rho, double z, std::size_t j) const noexcept {
+        if (values_.empty() || !(rho >= 0) || rho > rho_max_ || z < z_min_ || z > z_max_) return 0.0;
+        const double fr = rho * inv_dr_ - 0.5, fz = (z - z_min_) * inv_dz_ - 0.5;
         const int r0 = int(std::floor(fr)), z0 = int(std::floor(fz));
         const double ar = fr - r0, az = fz - z0;
-        double v = 0;
-        for (int dz = 0; dz < 2; ++dz)
-            for (int dr = 0; dr < 2; ++dr) {
-                const int ir = std::clamp(r0 + dr, 0, int(n_rho_) - 1), iz = std::clamp(z0 + dz, 0, int(n_z_) - 1);
-                const double w = (dr ? ar : 1 - ar) * (dz ? az : 1 - az);
-                v += w * values_[((c * n_z_ + std::size_t(iz)) * n_rho_ + std::size_t(ir)) * n_theta_ * n_phi_ + j];
-            }
-        return v;
+        const int ra = std::max(r0, 0), rb = std::min(r0 + 1, int(n_rho_) - 1);
+        const int za = std::max(z0, 0), zb = std::min(z0 + 1, int(n_z_) - 1);
+        const std::size_t nd = std::size_t(n_theta_) * n_phi_;
+        const float* base = values_.data() + c * n_z_ * n_rho_ * nd + j;
+        auto at = [&](int iz, int ir) { return double(base[(std::size_t(iz) * n_rho_ + std::size_t(ir)) * nd]); };
+        return (1 - az) * ((1 - ar) * at(za, ra) + ar * at(za, rb)) + az * ((1 - ar) * at(zb, ra) + ar * at(zb, rb));
     }
 
     /// Integral of L_o over the grid volume and all directions for channel c (per unit source
@@ -274,6 +284,7 @@ public:
             std::uint64_t(N) * t.n_rho_ * t.n_z_ * std::uint64_t(t.n_theta_) * t.n_phi_;
         if (count != expect) r.fail("value count " + std::to_string(count) + " != " + std::to_string(expect));
         r.get_array(t.values_, count);
+        t.set_derived();
         r.expect_end();
         for (float v : t.values_)
             if (!(std::isfinite(v) && v >= 0.0f)) r.fail("negative or non-finite value");
@@ -323,13 +334,6 @@ private:
         }
     };
 
-    [[nodiscard]] std::size_t direction_bin(double cos_theta, double phi) const noexcept {
-        const double theta = std::acos(std::clamp(cos_theta, -1.0, 1.0));
-        const std::size_t it = std::min<std::size_t>(n_theta_ - 1, std::size_t(theta / pi_v<double> * n_theta_));
-        const std::size_t ip =
-            std::min<std::size_t>(n_phi_ - 1, std::size_t(std::clamp(phi, 0.0, pi_v<double>) / pi_v<double> * n_phi_));
-        return it * n_phi_ + ip;
-    }
     /// Centre direction of bin j in the local frame (x = radial, z = axis); `mirror` flips phi.
     [[nodiscard]] Vec3<double> bin_direction(std::size_t j, bool mirror) const noexcept {
         const double th = pi_v<double> * (double(j / n_phi_) + 0.5) / n_theta_;
@@ -339,6 +343,11 @@ private:
 
     std::uint32_t n_rho_ = 0, n_z_ = 0, n_theta_ = 0, n_phi_ = 0;
     double rho_max_ = 1, z_min_ = -1, z_max_ = 1, g_ = 0;
+    double inv_dr_ = 1, inv_dz_ = 1;  ///< cells per mean free path (derived)
+    void set_derived() noexcept {
+        inv_dr_ = n_rho_ / rho_max_;
+        inv_dz_ = n_z_ / (z_max_ - z_min_);
+    }
     std::array<double, N> albedo_{};
     std::uint64_t photons_ = 0;
     std::vector<float> values_;
