@@ -12,6 +12,10 @@
 //  - save/load round trip, corrupted and truncated files, bad arguments.
 #include <catch2/catch.hpp>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -423,6 +427,18 @@ TEST_CASE("Shell tables: save/load round trip, corrupted and truncated files", "
     std::memcpy(huge.data() + 4, &big, sizeof big);
     CHECK_THROWS_AS(ShellTable::from_payload(huge), format_error);
 
+    // Fuzz: 300 random single-byte corruptions and truncations of the file all give format_error.
+    Rng frng = Rng::from_key(77);
+    for (int i = 0; i < 300; ++i) {
+        auto b = bytes;
+        if (i % 3 == 0) {
+            b.resize(std::size_t(frng.uniform<double>() * double(b.size())));
+        } else {
+            b[std::size_t(frng.uniform<double>() * double(b.size()))] ^= char(1 + (i % 255));
+        }
+        CHECK_THROWS_AS(ShellTable::load(write(b)), format_error);
+    }
+
     bad.p_scattered[0] += 0.5;
     CHECK_THROWS_AS(bad.save(dir / "x.shel"), invalid_argument);
     CHECK_THROWS_AS(ShellMedium<double>(bad), invalid_argument);
@@ -508,4 +524,27 @@ TEST_CASE("Shells vs walk kernel in a bounded medium: ShellMedium inside the wal
     const double se = std::sqrt(e1 * (1 - e1) / n);
     CHECK(std::abs(e1 - e2) < 4 * se + 0.01);
     CHECK(std::abs(z1 - z2) < 0.03);
+}
+
+TEST_CASE("Shell precomputation does not depend on the thread count", "[shells][determinism]") {
+    CMedium m(1.0, 0.8, HG(0.3));
+    const std::vector<double> radii{0.5, 1.0};
+    auto run = [&] {
+        const ShellSamples s = collect_shell_samples(ContinuousShellSource<CMedium>(m), radii, 9000, 5, 32, 2.0);
+        return build_shell_table(s).table;
+    };
+#ifdef _OPENMP
+    const int old = omp_get_max_threads();
+    omp_set_num_threads(1);
+    const ShellTable a = run();
+    omp_set_num_threads(2);
+    const ShellTable b = run();
+    omp_set_num_threads(old);
+#else
+    const ShellTable a = run(), b = run();
+#endif
+    CHECK(a.W == b.W);
+    CHECK(a.H == b.H);
+    CHECK(a.fa == b.fa);
+    CHECK(a.p_absorbed == b.p_absorbed);
 }
