@@ -197,6 +197,19 @@ int main(int argc, char** argv) {
             gl::write_exr(out / ("hybrid_" + file + ".exr"), all);
             gl::write_png(out / ("hybrid_" + file + ".png"), all, {exposure});
             gl::write_exr(out / ("hybrid_" + file + "_high.exr"), img.high.image());
+            if (t.mode == gl::HybridMode::ept_vpt && !t.optimal_pa) {
+                // Switch depth (Meng15 Fig. 12, bottom right): grain interactions in EPT before the switch.
+                gl::Image d = img.switch_depth;
+                float dmax = 0;
+                for (float v : d.rgb) dmax = std::max(dmax, v);
+                gl::write_exr(out / "hybrid_switch_depth.exr", d);
+                if (dmax > 0)
+                    for (float& v : d.rgb) v /= dmax;
+                gl::write_png(out / "hybrid_switch_depth.png", d);
+                std::printf("  %18s switch depth: mean over pixels %.2f, max %.2f grain interactions "
+                            "(hybrid_switch_depth.png, white = max)\n",
+                            "", img.switch_depth.mean(0), double(dmax));
+            }
             if (!t.optimal_pa && strip_slot < 3) {
                 for (int y = 0; y < height; ++y)
                     for (int x = 0; x < width; ++x)

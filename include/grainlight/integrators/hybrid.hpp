@@ -726,6 +726,9 @@ template <LitScene Scene, BoundaryShape Shape, class Distance>
 /// per-pixel variance statistics of the bundle samples and the CPU time of the two parts.
 struct HybridImages {
     Film low, high;
+    /// Per pixel: mean number of EPT grain interactions before the switch over the paths that
+    /// switched (0 where none did), in all three channels (Meng15 Fig. 12's switch-depth view).
+    Image switch_depth;
     int spp = 0;                    ///< bundles per pixel
     double var_total = 0;           ///< mean over pixels of the sample variance of one bundle estimate (channel mean)
     double var_low = 0, var_high = 0;
@@ -774,7 +777,7 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
     const int W = camera.width(), H = camera.height();
     const int w = (W + stride - 1) / stride, h = (H + stride - 1) / stride;
     const int N = opt.bundle_size;
-    HybridImages img{Film(w, h), Film(w, h), spp};
+    HybridImages img{Film(w, h), Film(w, h), Image(w, h), spp};
     struct RowStats {
         double var_t = 0, var_l = 0, var_h = 0, m2_h = 0, sec_l = 0, sec_h = 0;
         HybridCounters c{};
@@ -794,6 +797,7 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
             const int X = std::min(W - 1, x * stride + stride / 2), Y = std::min(H - 1, y * stride + stride / 2);
             const std::uint64_t pixel = std::uint64_t(Y) * std::uint64_t(W) + std::uint64_t(X);
             Welford wt, wl, wh;
+            double depth_sum = 0, depth_n = 0;
             for (int s = 0; s < spp; ++s) {
                 for (int i = 0; i < N; ++i) {
                     rngs[std::size_t(i)] = Rng::from_key(seed, pixel, std::uint64_t(s) * std::uint64_t(N) + std::uint64_t(i));
@@ -801,6 +805,11 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
                     rays[std::size_t(i)] = camera.generate_ray(F(X) + u.x, F(Y) + u.y);
                 }
                 const auto b = hybrid_bundle(scene_ept, scene_vpt, agg, ctx, rays.data(), rngs.data(), N, opt);
+                for (int i = 0; i < N; ++i)
+                    if (b.path[std::size_t(i)].switched) {
+                        depth_sum += double(b.path[std::size_t(i)].switch_order);
+                        depth_n += 1;
+                    }
                 S lo = b.mean_low(), hi = b.mean_high();
                 if (!lo.is_finite()) lo = S(0.0f);
                 if (!hi.is_finite()) hi = S(0.0f);
@@ -817,6 +826,7 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
             rs.var_l += wl.variance();
             rs.var_h += wh.variance();
             rs.m2_h += wh.variance() + wh.mean() * wh.mean();
+            for (int c = 0; c < 3; ++c) img.switch_depth.at(x, y, c) = depth_n > 0 ? float(depth_sum / depth_n) : 0.0f;
         }
         // The row's thread CPU time, split between the two parts in the ratio of their
         // steady-clock times measured inside the bundles.
