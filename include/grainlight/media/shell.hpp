@@ -279,7 +279,8 @@ enum class ShellStepKind : std::uint8_t {
     straight,   ///< no event within the shell: moved by r along omega (probability f_a)
     scattered,  ///< exit point and direction sampled from T_r
     absorbed,   ///< analog absorption inside the shell (only with analog_absorption)
-    escaped     ///< a straight step reached the boundary (distance t_boundary < r)
+    escaped,    ///< a straight step reached the boundary (distance t_boundary < r)
+    exited      ///< the sampled exit point lies outside the volume: leave along y - x (Fig. 5)
 };
 
 /// Result of one shell step.
@@ -432,6 +433,32 @@ public:
         dir_pdf = exit_direction_density(i, c) * cos_out;
     }
 
+    /// Sample an exit direction from p_r(omega' | y) of shell i for a given exit point y of the
+    /// shell around x (start direction omega); returns it and its solid-angle pdf in `dir_pdf`.
+    /// Uses 4 uniforms. (For MIS of Fig. 6's second shadow ray.)
+    [[nodiscard]] Vec3<F> sample_direction_at(int i, const Vec3<F>& x, const Vec3<F>& omega, const Vec3<F>& y,
+                                              Rng& rng, F& dir_pdf) const noexcept {
+        const std::size_t nc = std::size_t(t_.n_c), nu = std::size_t(t_.n_u), nv = std::size_t(t_.n_v);
+        const Vec3<F> n = glm::normalize(y - x);
+        const F c1 = std::clamp(glm::dot(n, omega), F(-1), F(1));
+        const std::size_t row = std::size_t(i) * nc + cell(c1 * F(0.5) + F(0.5), nc);
+        dir_pdf = F(0);
+        if (!(row_mass_[row] > 0)) return n;
+        const std::size_t k = term_dist_[row].sample(double(rng.uniform<F>()));
+        const std::size_t q = h_dist_[k].sample(double(rng.uniform<F>()));
+        ShellCoords<F> c;
+        c.cos_theta1 = c1;
+        c.u = (F(q % nu) + rng.uniform<F>()) / F(nu);
+        c.v = (F(q / nu) + rng.uniform<F>()) / F(nv);
+        const Vec3<F> e1 = detail::shell_exit_tangent(n, omega);
+        const Vec3<F> e2 = glm::cross(n, e1);
+        const Vec2<F> d = sample_uniform_disk_concentric(Vec2<F>(c.u, c.v));
+        const F z = safe_sqrt(F(1) - d.x * d.x - d.y * d.y);
+        const Vec3<F> w = glm::normalize(d.x * e1 + d.y * e2 + z * n);
+        dir_pdf = exit_direction_density(i, c) * std::max(F(0), glm::dot(w, n));
+        return w;
+    }
+
     /// One call of Moon07 Fig. 5 (advanceRayUsingShells) from x along unit omega.
     /// \param t_boundary distance to the medium surface along omega (inf if none)
     /// \param inside optional inside test bool(const Vec3<F>&) for the "outside the volume" rule:
@@ -464,7 +491,7 @@ public:
         sample_exit(s.shell, x, omega, rng, s.p, s.w, s.direction_pdf);
         s.kind = ShellStepKind::scattered;
         if (!inside(s.p)) {
-            s.kind = ShellStepKind::escaped;
+            s.kind = ShellStepKind::exited;
             s.w = glm::normalize(s.p - x);
         }
         return s;
@@ -486,6 +513,7 @@ public:
                 it.p = s.p;
                 return it;
             case ShellStepKind::escaped:
+            case ShellStepKind::exited:
                 it.kind = EventKind::escape;
                 it.t = t_max;
                 it.p = ray(t_max);
@@ -513,6 +541,39 @@ public:
                 return it;
         }
         return it;
+    }
+
+    /// Moon07 Fig. 6, first shadow ray: solid-angle density (about x) with which a step from x
+    /// along omega (t_boundary: distance to the surface along omega) leaves the medium through a
+    /// sampled exit point outside the volume in direction w_l, times the expected throughput
+    /// factor: (1 - f_a) P_s / (P_s + P_a) p_r(y_l) / P_s r^2 with y_l = x + r w_l, zero if y_l is
+    /// inside (boundary(y_l) >= 0). Multiply by the light's radiance / its pdf for an estimate.
+    [[nodiscard]] F exit_escape_density(const Vec3<F>& x, const Vec3<F>& omega, F t_boundary,
+                                        const Vec3<F>& w_l) const noexcept {
+        const int i = select_shell(boundary_(x));
+        const F r = F(t_.radii[std::size_t(i)]);
+        const Vec3<F> y = x + r * w_l;
+        if (!(boundary_(y) < F(0))) return F(0);
+        const F pu = t_boundary < r ? attenuation(t_boundary) : F(t_.p_unscattered[std::size_t(i)]);
+        const double pe = t_.p_scattered[std::size_t(i)] + t_.p_absorbed[std::size_t(i)];
+        if (!(pe > 0)) return F(0);
+        return (F(1) - pu) / F(pe) * exit_position_density(i, glm::dot(w_l, omega)) * r * r;
+    }
+
+    /// Moon07 Fig. 6, second shadow ray: after a scattered step from (x, omega) with shell `shell`
+    /// landed at y, the solid-angle density with which the path continues along w_l *and* its
+    /// next step leaves the medium unimpeded: p_r(w_l | y) cos f_a(d_l), where d_l is the distance
+    /// from y to the surface along w_l, and zero unless d_l < the radius the next step uses
+    /// (otherwise that step moves by its radius and stays inside). An integrator that adds this
+    /// must not also count the straight escape of the step that follows a scattered step.
+    [[nodiscard]] F straight_escape_density(int shell, const Vec3<F>& x, const Vec3<F>& omega, const Vec3<F>& y,
+                                            const Vec3<F>& w_l, F d_l) const noexcept {
+        const Vec3<F> n = glm::normalize(y - x);
+        const F cos_out = glm::dot(w_l, n);
+        if (!(cos_out > F(0))) return F(0);
+        const F r_next = F(t_.radii[std::size_t(select_shell(boundary_(y)))]);
+        if (!(d_l < r_next)) return F(0);
+        return exit_direction_density(shell, shell_coords(x, omega, y, w_l)) * cos_out * attenuation(d_l);
     }
 
     /// Medium concept: f_a(t) in every channel (rng unused).
