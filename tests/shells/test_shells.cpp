@@ -555,10 +555,10 @@ TEST_CASE("Fig. 6 direct illumination: shadow-ray estimates equal the escape hit
     // centre of a ball under an environment light L(w) = 1 + 2 max(0, w.z)^3:
     //  (1) analog: count every escape (straight escape along omega, or a sampled exit outside the
     //      ball leaving along y - x) with L of its direction;
-    //  (2) Moon07 Fig. 6: at every step a shadow direction w_l (uniform sphere) weighted by
-    //      exit_escape_density (replaces the exits outside), and after every scattered step one
-    //      weighted by straight_escape_density (replaces the straight escape of the next step);
-    //      only the straight escapes not preceded by a scattered step are still counted by hit.
+    //  (2) Moon07 Fig. 6: at every step a shadow direction w_l weighted by exit_escape_density
+    //      (replaces the exits outside), and after every scattered step one weighted by
+    //      straight_escape_density (replaces the straight escapes along the new direction);
+    //      only straight escapes along the initial direction are still counted by hit.
     // Both are unbiased for the same quantity, so they must agree within MC error.
     const auto& f = fixture();
     const double Rm = 2.5;
@@ -636,9 +636,7 @@ TEST_CASE("Fig. 6 direct illumination: shadow-ray estimates equal the escape hit
                     const double pdf_b = 0.5 / inv_pdf + 0.5 * q_dir;
                     contrib += weight * sm.straight_escape_density(s.shell, x, w, s.p, wl2, t_surface(s.p, wl2)) *
                                L(wl2) / pdf_b;
-                    dir_from_shell = true;
-                } else {
-                    dir_from_shell = false;
+                    dir_from_shell = true;  // stays true through straight steps
                 }
                 x = s.p;
                 w = s.w;

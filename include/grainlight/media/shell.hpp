@@ -560,20 +560,39 @@ public:
         return (F(1) - pu) / F(pe) * exit_position_density(i, glm::dot(w_l, omega)) * r * r;
     }
 
+    /// Probability that steps from p along w go straight (no event) until they leave the medium
+    /// at distance t_boundary: the product of p_unscattered of every full straight step (each
+    /// with the largest shell fitting at its start) and f_a of the last, partial one. For an
+    /// exponential f_a this is f_a(t_boundary); for a discrete medium it is what the shell
+    /// process does.
+    [[nodiscard]] F straight_chain_transmittance(const Vec3<F>& p, const Vec3<F>& w, F t_boundary) const noexcept {
+        F T = F(1);
+        Vec3<F> q = p;
+        F left = t_boundary;
+        for (int k = 0; k < (1 << 20) && T > F(0); ++k) {
+            const int i = select_shell(boundary_(q));
+            const F r = F(t_.radii[std::size_t(i)]);
+            if (left < r) return T * attenuation(left);
+            T *= F(t_.p_unscattered[std::size_t(i)]);
+            q += r * w;
+            left -= r;
+        }
+        return T;
+    }
+
     /// Moon07 Fig. 6, second shadow ray: after a scattered step from (x, omega) with shell `shell`
-    /// landed at y, the solid-angle density with which the path continues along w_l *and* its
-    /// next step leaves the medium unimpeded: p_r(w_l | y) cos f_a(d_l), where d_l is the distance
-    /// from y to the surface along w_l, and zero unless d_l < the radius the next step uses
-    /// (otherwise that step moves by its radius and stays inside). An integrator that adds this
-    /// must not also count the straight escape of the step that follows a scattered step.
+    /// landed at y, the solid-angle density with which the path continues along w_l *and* leaves
+    /// the medium without another event: p_r(w_l | y) cos straight_chain_transmittance(y, w_l,
+    /// d_l), d_l the distance from y to the surface along w_l (the paper writes f_a(d_l), equal
+    /// for exponential f_a). An integrator that adds this must not count, by hitting, the
+    /// straight escapes of paths whose direction was last set by a scattered step.
     [[nodiscard]] F straight_escape_density(int shell, const Vec3<F>& x, const Vec3<F>& omega, const Vec3<F>& y,
                                             const Vec3<F>& w_l, F d_l) const noexcept {
         const Vec3<F> n = glm::normalize(y - x);
         const F cos_out = glm::dot(w_l, n);
         if (!(cos_out > F(0))) return F(0);
-        const F r_next = F(t_.radii[std::size_t(select_shell(boundary_(y)))]);
-        if (!(d_l < r_next)) return F(0);
-        return exit_direction_density(shell, shell_coords(x, omega, y, w_l)) * cos_out * attenuation(d_l);
+        return exit_direction_density(shell, shell_coords(x, omega, y, w_l)) * cos_out *
+               straight_chain_transmittance(y, w_l, d_l);
     }
 
     /// Medium concept: f_a(t) in every channel (rng unused).
