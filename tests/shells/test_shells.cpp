@@ -650,3 +650,23 @@ TEST_CASE("Fig. 6 direct illumination: shadow-ray estimates equal the escape hit
     CHECK(exited > 100);  // the exit-outside branch is exercised
     CHECK(std::abs(analog.mean() - nee.mean()) < 4 * se);
 }
+
+TEST_CASE("Shell builder rejects bad arguments", "[shells][args]") {
+    CMedium m(1.0, 0.9, HG(0.0));
+    const ContinuousShellSource<CMedium> src(m);
+    CHECK_THROWS_AS(collect_shell_samples(src, {}, 10, 1), invalid_argument);
+    CHECK_THROWS_AS(collect_shell_samples(src, {1.0, 0.5}, 10, 1), invalid_argument);
+    CHECK_THROWS_AS(collect_shell_samples(src, {-1.0}, 10, 1), invalid_argument);
+    CHECK_THROWS_AS(collect_shell_samples(src, {1.0}, 0, 1), invalid_argument);
+    CHECK_THROWS_AS(collect_shell_samples(src, {1.0}, 10, 1, 1), invalid_argument);
+    const std::vector<float> pts{0.f, 0.5f, 0.5f, 0.1f, 0.2f, 0.3f};
+    CHECK_THROWS_AS(knn_density_grid(pts, 10, 1, 4, 4, 4), invalid_argument);
+    CHECK_THROWS_AS(knn_cell_density_grid(pts, 0, 8, 4, 4, 4), invalid_argument);
+    CHECK_THROWS_AS(knn_cell_density_grid(std::vector<float>{0.f, 1.f}, 10, 8, 4, 4, 4), invalid_argument);
+    CHECK_THROWS_AS(knn_cell_density_grid(pts, 10, 8, 0, 4, 4), invalid_argument);
+    // Two samples: the cell estimate still integrates to samples / n_total exactly.
+    const auto g = knn_cell_density_grid(pts, 10, 8, 4, 4, 4);
+    double integral = 0;
+    for (double v : g) integral += v * 2.0 / 64;
+    CHECK(integral == Approx(0.2).epsilon(1e-12));
+}
