@@ -54,6 +54,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
 #include "grainlight/core/error.hpp"
@@ -71,6 +72,13 @@
 #include "grainlight/traversal/octree.hpp"
 
 namespace grainlight {
+
+namespace detail {
+template <class P>
+struct is_henyey_greenstein : std::false_type {};
+template <std::floating_point F, class S>
+struct is_henyey_greenstein<HenyeyGreenstein<F, S>> : std::true_type {};
+}  // namespace detail
 
 /// A light surface sample on the boundary: position, unit outward normal, area it represents.
 template <std::floating_point F>
@@ -293,13 +301,13 @@ public:
     }
 
     /// Phase value for light arriving along the mean direction d of a node whose unit directions
-    /// have mean resultant length `coherence` (1 for a single sample). For a Henyey-Greenstein
-    /// phase (a type with `g()`), the lobe averaged over the node's directions is approximated by
+    /// have mean resultant length `coherence` (1 for a single sample). For a HenyeyGreenstein
+    /// phase, the lobe averaged over the node's directions is approximated by
     /// HG with g * coherence (exact first moment: the mean cosine of a lobe convolved with a
     /// direction spread of mean cosine c is g c); other phase functions use the mean direction.
     [[nodiscard]] S light_phase(const Vec3<F>& d, const Vec3<F>& w, F coherence) const noexcept {
         const Phase& ph = medium_.phase();
-        if constexpr (requires { ph.g(); }) {
+        if constexpr (detail::is_henyey_greenstein<Phase>::value) {
             if (coherence < F(1)) {
                 const F gc = F(ph.g()) * std::clamp(coherence, F(0), F(1));
                 return S(henyey_greenstein_cos_pdf(F(glm::dot(d, w)), gc) * inv_two_pi_v<F>);
