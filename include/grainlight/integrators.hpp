@@ -1,7 +1,13 @@
 /// @file grainlight/integrators.hpp
-/// Umbrella header: the walk kernel, the volumetric path tracer and the render driver.
+/// Umbrella header for the reference integrators: the walk kernel (camera paths and photon
+/// walks with per-event callbacks), the volumetric path tracer and its render driver, explicit
+/// path tracing of grains (Meng15), the EPT -> VPT -> DA hybrid (Meng15 Sec. 5) and point-based
+/// rendering through refractive boundaries (Wang18).
 #pragma once
 
+#include "grainlight/integrators/ept.hpp"
+#include "grainlight/integrators/hybrid.hpp"
+#include "grainlight/integrators/point_based.hpp"
 #include "grainlight/integrators/render.hpp"
 #include "grainlight/integrators/vpt.hpp"
 #include "grainlight/integrators/walk.hpp"

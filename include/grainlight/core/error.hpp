@@ -61,6 +61,27 @@ template <class T>
 #endif
 }
 
+/// Throw an error of type E (grainlight::format_error, io_error, ...) with `msg`; in builds
+/// without exceptions print it and abort. Library code raises through this (or
+/// raise_invalid_argument) instead of writing `throw`, so every header compiles with
+/// -fno-exceptions.
+template <class E>
+[[noreturn]] inline void raise_error(const std::string& msg) {
+#if defined(__cpp_exceptions) || defined(__EXCEPTIONS)
+    throw E(msg);
+#else
+    std::fputs(("grainlight: " + msg + "\n").c_str(), stderr);
+    std::abort();
+#endif
+}
+
+/// Exceptions are enabled in this translation unit.
+#if defined(__cpp_exceptions) || defined(__EXCEPTIONS)
+#define GRAINLIGHT_HAS_EXCEPTIONS 1
+#else
+#define GRAINLIGHT_HAS_EXCEPTIONS 0
+#endif
+
 /// Validate `cond`; on failure raise_invalid_argument. NaN values fail every range check because
 /// callers phrase conditions positively (`x >= 0`, not `!(x < 0)`).
 template <class T>

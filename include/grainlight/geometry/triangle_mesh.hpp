@@ -126,16 +126,10 @@ struct TriangleMesh {
 };
 
 namespace detail {
-/// Throw an error of type E (grainlight::format_error, io_error, ...) with `msg`; in builds
-/// without exceptions print it and abort (like raise_invalid_argument in core/error.hpp).
+/// Kept for callers of the old name; see grainlight::raise_error in core/error.hpp.
 template <class E>
 [[noreturn]] inline void raise_error(const std::string& msg) {
-#if defined(__cpp_exceptions) || defined(__EXCEPTIONS)
-    throw E(msg);
-#else
-    std::fputs(("grainlight: " + msg + "\n").c_str(), stderr);
-    std::abort();
-#endif
+    grainlight::raise_error<E>(msg);
 }
 
 /// Parse a 1-based (or negative, relative) OBJ index; returns false on malformed text.

@@ -249,11 +249,15 @@ struct ShellTable {
         r.get_array(t.H, std::uint64_t(t.rank) * std::uint64_t(t.n_u) * std::uint64_t(t.n_v));
         r.get_array(t.fa, nfa);
         r.expect_end();
+#if GRAINLIGHT_HAS_EXCEPTIONS
         try {
             t.validate();
         } catch (const invalid_argument& e) {
-            throw format_error(context + ": invalid content: " + e.what());
+            raise_error<format_error>(context + ": invalid content: " + e.what());
         }
+#else
+        t.validate();
+#endif
         return t;
     }
 

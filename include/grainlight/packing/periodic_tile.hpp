@@ -230,11 +230,15 @@ public:
         r.expect_end();
         std::vector<Vec3d> c(static_cast<std::size_t>(n));
         for (std::size_t i = 0; i < c.size(); ++i) c[i] = Vec3d(raw[3 * i], raw[3 * i + 1], raw[3 * i + 2]);
+#if GRAINLIGHT_HAS_EXCEPTIONS
         try {
             return PeriodicTile(side, radius, std::move(c));
         } catch (const invalid_argument& e) {
-            throw format_error(context + ": invalid tile: " + e.what());
+            raise_error<format_error>(context + ": invalid tile: " + e.what());
         }
+#else
+        return PeriodicTile(side, radius, std::move(c));
+#endif
     }
     /// Write the tile to `path` atomically (grainlight container, kind TILE v1).
     void save(const std::filesystem::path& path) const {

@@ -147,7 +147,7 @@ public:
         if (pos_ != size_) fail(std::to_string(size_ - pos_) + " unexpected trailing bytes");
     }
     /// Throw format_error "<context>: <what>".
-    [[noreturn]] void fail(const std::string& what) const { throw format_error(context_ + ": " + what); }
+    [[noreturn]] void fail(const std::string& what) const { raise_error<format_error>(context_ + ": " + what); }
 
 private:
     void require(std::size_t n) const {
@@ -209,14 +209,14 @@ inline void write_file_atomic(const std::filesystem::path& path, const void* dat
     const auto tmp = detail::temporary_path_for(path);
     {
         std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-        if (!f) throw io_error("cannot open '" + tmp.string() + "' for writing");
+        if (!f) raise_error<io_error>("cannot open '" + tmp.string() + "' for writing");
         f.write(static_cast<const char*>(data), static_cast<std::streamsize>(size));
         f.flush();
         if (!f) {
             f.close();
             std::error_code ec;
             std::filesystem::remove(tmp, ec);
-            throw io_error("write failed for '" + tmp.string() + "'");
+            raise_error<io_error>("write failed for '" + tmp.string() + "'");
         }
     }
     std::error_code ec;
@@ -224,7 +224,7 @@ inline void write_file_atomic(const std::filesystem::path& path, const void* dat
     if (ec) {
         std::error_code ec2;
         std::filesystem::remove(tmp, ec2);
-        throw io_error("cannot rename '" + tmp.string() + "' to '" + path.string() + "': " + ec.message());
+        raise_error<io_error>("cannot rename '" + tmp.string() + "' to '" + path.string() + "': " + ec.message());
     }
 }
 
@@ -255,7 +255,7 @@ inline void write_container_atomic(const std::filesystem::path& path, std::uint3
                                                                  std::uint32_t expected_kind,
                                                                  std::uint32_t expected_kind_version,
                                                                  const std::string& context) {
-    auto fail = [&](const std::string& what) -> void { throw format_error(context + ": " + what); };
+    auto fail = [&](const std::string& what) -> void { raise_error<format_error>(context + ": " + what); };
     if (size < container_header_size)
         fail("truncated: " + std::to_string(size) + " bytes is shorter than the " +
              std::to_string(container_header_size) + "-byte header");
@@ -295,14 +295,14 @@ inline void write_container_atomic(const std::filesystem::path& path, std::uint3
                                                                std::uint32_t expected_kind,
                                                                std::uint32_t expected_kind_version) {
     std::ifstream f(path, std::ios::binary);
-    if (!f) throw io_error("cannot open '" + path.string() + "' for reading");
+    if (!f) raise_error<io_error>("cannot open '" + path.string() + "' for reading");
     f.seekg(0, std::ios::end);
     const auto end = f.tellg();
-    if (end < 0) throw io_error("cannot determine the size of '" + path.string() + "'");
+    if (end < 0) raise_error<io_error>("cannot determine the size of '" + path.string() + "'");
     f.seekg(0, std::ios::beg);
     std::vector<unsigned char> bytes(static_cast<std::size_t>(end));
     if (!bytes.empty()) f.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-    if (!f) throw io_error("read failed for '" + path.string() + "'");
+    if (!f) raise_error<io_error>("read failed for '" + path.string() + "'");
     return decode_container(bytes.data(), bytes.size(), expected_kind, expected_kind_version, "'" + path.string() + "'");
 }
 

@@ -359,7 +359,9 @@ template <class Source>
     constexpr std::uint64_t block = 4096;
     const std::uint64_t n_blocks = (n_paths + block - 1) / block;
     std::vector<ShellSamples> parts(n_blocks, ShellSamples(radii, fa_bins, fa_d_max));
+#if defined(_OPENMP)
 #pragma omp parallel for schedule(dynamic, 1)
+#endif
     for (std::int64_t b = 0; b < std::int64_t(n_blocks); ++b) {
         ShellSamples& part = parts[std::size_t(b)];
         ShellRecorder rec(part);
@@ -527,10 +529,14 @@ inline void check_knn_args(const char* where, std::span<const float> pts, double
     // Bandwidths in parallel (each is a pure function of the points: thread-count independent).
     std::vector<double> bandwidth(kp.size(), 0.5);
     if (kp.size() > 1) {
+#if defined(_OPENMP)
 #pragma omp parallel
+#endif
         {
             std::vector<double> scratch;
+#if defined(_OPENMP)
 #pragma omp for schedule(static)
+#endif
             for (std::int64_t i = 0; i < std::int64_t(kp.size()); ++i)
                 bandwidth[std::size_t(i)] = kp.kth_distance(kp.point(std::size_t(i)), kk, scratch);
         }
