@@ -366,6 +366,35 @@ template <BoundaryShape Shape>
     return st;
 }
 
+namespace detail {
+/// Next-event estimation from a Lambertian point x (unit normal nf facing the arriving path,
+/// albedo rho, path throughput thr) through a scene and a granular aggregate: one light sample,
+/// an Algorithm 1 shadow ray through the grains (counted in `grain_rays`), the scene's
+/// transmittance, and the power-heuristic MIS weight against cosine sampling. Returns the
+/// contribution (black when the light is not visible). Shared by EPT and the hybrid integrator.
+template <LitScene Scene, class Aggregate, class S>
+[[nodiscard]] S ept_nee_lambertian(const Scene& scene, const Aggregate& agg, Rng& rng, double R, const Vec3d& x,
+                                   const Vec3d& nf, const S& rho, const S& thr, std::uint64_t& grain_rays) noexcept {
+    using F = typename Scene::Float;
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    const Vec3<F> u(rng.uniform<F>(), rng.uniform<F>(), rng.uniform<F>());
+    const Vec3d origin = x + grain_surface_epsilon(R) * nf;
+    const LightSample<F, S> ls = scene.sample_light(Vec3<F>(origin), u);
+    if (!ls || ls.L.is_black()) return S(F(0));
+    const Vec3d w(ls.w);
+    const double c = glm::dot(w, nf);
+    if (c <= 0) return S(F(0));
+    const double dist = std::isinf(double(ls.dist)) ? inf : double(ls.dist) * (1 - 1e-4);
+    ++grain_rays;
+    if (agg.occluded(origin, w, 0.0, std::isinf(dist) ? 1e30 : dist)) return S(F(0));
+    const S tr = shadow_transmittance(scene, Vec3<F>(origin), Vec3<F>(w), ls.dist, -1, rng);
+    if (tr.is_black()) return S(F(0));
+    const double pdf_b = c * inv_pi_v<double>;
+    const double wmis = ls.delta ? 1.0 : power_heuristic(double(ls.pdf), pdf_b);
+    return thr * rho * tr * ls.L * F(c * inv_pi_v<double> * wmis / double(ls.pdf));
+}
+}  // namespace detail
+
 /// Radiance of a camera path split into low-order (<= k grain interactions) and high-order parts.
 template <class S>
 struct EptRadiance {
@@ -383,7 +412,6 @@ template <LitScene Scene, BoundaryShape Shape>
                                                                  const EptOptions& opt = {}) noexcept {
     using F = typename Scene::Float;
     using S = typename Scene::Spectrum;
-    constexpr double inf = std::numeric_limits<double>::infinity();
     EptRadiance<S> out;
     Vec3d p(ray.o), d(glm::normalize(Vec3d(ray.d)));
     S beta(F(1));
@@ -412,22 +440,7 @@ template <LitScene Scene, BoundaryShape Shape>
     };
     // NEE from a Lambertian point (n facing the arriving path) with albedo rho.
     auto nee_diffuse = [&](const Vec3d& x, const Vec3d& nf, const S& rho, const S& thr) {
-        if (!opt.nee) return;
-        const Vec3<F> u(rng.uniform<F>(), rng.uniform<F>(), rng.uniform<F>());
-        const Vec3d origin = x + detail::grain_surface_epsilon(R) * nf;
-        const LightSample<F, S> ls = scene.sample_light(Vec3<F>(origin), u);
-        if (!ls || ls.L.is_black()) return;
-        const Vec3d w(ls.w);
-        const double c = glm::dot(w, nf);
-        if (c <= 0) return;
-        const double dist = std::isinf(double(ls.dist)) ? inf : double(ls.dist) * (1 - 1e-4);
-        ++out.grain_rays;
-        if (agg.occluded(origin, w, 0.0, std::isinf(dist) ? 1e30 : dist)) return;
-        const S tr = shadow_transmittance(scene, Vec3<F>(origin), Vec3<F>(w), ls.dist, -1, rng);
-        if (tr.is_black()) return;
-        const double pdf_b = c * inv_pi_v<double>;
-        const double wmis = ls.delta ? 1.0 : power_heuristic(double(ls.pdf), pdf_b);
-        add(thr * rho * tr * ls.L * F(c * inv_pi_v<double> * wmis / double(ls.pdf)));
+        if (opt.nee) add(detail::ept_nee_lambertian(scene, agg, rng, R, x, nf, rho, thr, out.grain_rays));
     };
 
     while (events < opt.max_events) {

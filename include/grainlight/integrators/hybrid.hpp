@@ -489,7 +489,6 @@ int hybrid_ept_step(const Scene& scene, const GranularAggregate<Shape>& agg, Hyb
                     std::uint64_t& grain_rays, Vec3d& x_switch) noexcept {
     using F = typename Scene::Float;
     using S = typename Scene::Spectrum;
-    constexpr double inf = std::numeric_limits<double>::infinity();
     const EptOptions& opt = hopt.ept;
     if (ps.events >= opt.max_events) return 1;
     const double R = agg.grain_radius();
@@ -513,22 +512,7 @@ int hybrid_ept_step(const Scene& scene, const GranularAggregate<Shape>& agg, Hyb
         add(beta * Le * F(w));
     };
     auto nee_diffuse = [&](const Vec3d& x, const Vec3d& nf, const S& rho, const S& thr) {
-        if (!opt.nee) return;
-        const Vec3<F> u(rng.uniform<F>(), rng.uniform<F>(), rng.uniform<F>());
-        const Vec3d origin = x + detail::grain_surface_epsilon(R) * nf;
-        const LightSample<F, S> ls = scene.sample_light(Vec3<F>(origin), u);
-        if (!ls || ls.L.is_black()) return;
-        const Vec3d w(ls.w);
-        const double c = glm::dot(w, nf);
-        if (c <= 0) return;
-        const double dist = std::isinf(double(ls.dist)) ? inf : double(ls.dist) * (1 - 1e-4);
-        ++grain_rays;
-        if (agg.occluded(origin, w, 0.0, std::isinf(dist) ? 1e30 : dist)) return;
-        const S tr = shadow_transmittance(scene, Vec3<F>(origin), Vec3<F>(w), ls.dist, -1, rng);
-        if (tr.is_black()) return;
-        const double pdf_b = c * inv_pi_v<double>;
-        const double wmis = ls.delta ? 1.0 : power_heuristic(double(ls.pdf), pdf_b);
-        add(thr * rho * tr * ls.L * F(c * inv_pi_v<double> * wmis / double(ls.pdf)));
+        if (opt.nee) add(detail::ept_nee_lambertian(scene, agg, rng, R, x, nf, rho, thr, grain_rays));
     };
 
     const Ray<F> r{Vec3<F>(p), Vec3<F>(d)};
