@@ -27,6 +27,24 @@
 
 namespace grainlight {
 
+/// Validate the radius of a grain that must fit in its unit bounding sphere: (0, 1].
+inline void check_grain_radius(std::string_view where, std::string_view param, double radius) {
+    check_argument(radius > 0.0 && radius <= 1.0, where, param, radius,
+                   "(0, 1] (the grain must fit in its unit bounding sphere)");
+}
+
+/// Validate a grain mesh for its unit bounding sphere: a valid mesh, every vertex within the unit
+/// sphere, watertight, outward normals (positive signed volume). Returns its bounding radius.
+inline double check_grain_mesh(std::string_view where, const TriangleMesh<float>& mesh) {
+    mesh.validate(std::string(where));
+    const double r = double(mesh.max_vertex_radius());
+    check_argument(r > 0.0 && r <= 1.0 + 1e-6, where, "bounding radius of the mesh", r,
+                   "(0, 1] (the grain must fit in its unit bounding sphere)");
+    check_argument(mesh.is_watertight(), where, "watertight", "no", "a closed, consistently oriented mesh");
+    check_argument(mesh.signed_volume() > 0.0, where, "signed volume", mesh.signed_volume(), "> 0 (outward normals)");
+    return r;
+}
+
 /// Procedural grain shapes.
 enum class GrainShape {
     sphere,   ///< a sphere (the scatterometer intersects it analytically; the mesh is for renderers)

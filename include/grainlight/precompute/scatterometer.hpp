@@ -292,8 +292,7 @@ class ScatterometerGrain {
 public:
     /// Analytic sphere of radius `radius` in (0, 1].
     [[nodiscard]] static ScatterometerGrain sphere(double radius, const GrainMaterial& material) {
-        check_argument(radius > 0.0 && radius <= 1.0, "ScatterometerGrain::sphere", "radius", radius,
-                       "(0, 1] (the grain must fit in its unit bounding sphere)");
+        check_grain_radius("ScatterometerGrain::sphere", "radius", radius);
         material.validate();
         ScatterometerGrain g;
         g.sphere_radius_ = radius;
@@ -302,13 +301,7 @@ public:
     }
     /// Any watertight mesh with outward normals, inside the unit sphere.
     [[nodiscard]] static ScatterometerGrain mesh(const TriangleMesh<float>& mesh, const GrainMaterial& material) {
-        mesh.validate("ScatterometerGrain::mesh");
-        const double r = double(mesh.max_vertex_radius());
-        check_argument(r > 0.0 && r <= 1.0 + 1e-6, "ScatterometerGrain::mesh", "bounding radius of the mesh", r,
-                       "(0, 1] (the grain must fit in its unit bounding sphere)");
-        check_argument(mesh.is_watertight(), "ScatterometerGrain::mesh", "watertight", 0, "a closed, consistently oriented mesh");
-        check_argument(mesh.signed_volume() > 0.0, "ScatterometerGrain::mesh", "signed volume", mesh.signed_volume(),
-                       "> 0 (outward normals)");
+        const double r = check_grain_mesh("ScatterometerGrain::mesh", mesh);
         material.validate();
         ScatterometerGrain g;
         g.bvh_ = std::make_shared<const Bvh<float>>(mesh);
@@ -320,8 +313,7 @@ public:
     /// uses the analytic sphere.
     [[nodiscard]] static ScatterometerGrain procedural(GrainShape shape, double radius, const GrainMaterial& material,
                                                        std::uint64_t seed = 1, int level = 5) {
-        check_argument(radius > 0.0 && radius <= 1.0, "ScatterometerGrain::procedural", "grain radius", radius,
-                       "(0, 1] (the grain must fit in its unit bounding sphere)");
+        check_grain_radius("ScatterometerGrain::procedural", "grain radius", radius);
         if (shape == GrainShape::sphere) return sphere(radius, material);
         return mesh(make_grain_mesh<float>(shape, float(radius), seed, level), material);
     }

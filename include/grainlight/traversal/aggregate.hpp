@@ -51,8 +51,7 @@ namespace grainlight {
 class GrainExemplar {
 public:
     [[nodiscard]] static GrainExemplar sphere(double radius, const GrainMaterial& material) {
-        check_argument(radius > 0.0 && radius <= 1.0, "GrainExemplar::sphere", "radius", radius,
-                       "(0, 1] (the grain must fit in its unit bounding sphere)");
+        check_grain_radius("GrainExemplar::sphere", "radius", radius);
         material.validate();
         GrainExemplar g;
         g.radius_ = radius;
@@ -60,13 +59,7 @@ public:
         return g;
     }
     [[nodiscard]] static GrainExemplar mesh(const TriangleMesh<float>& m, const GrainMaterial& material) {
-        m.validate("GrainExemplar::mesh");
-        const double r = double(m.max_vertex_radius());
-        check_argument(r > 0.0 && r <= 1.0 + 1e-6, "GrainExemplar::mesh", "bounding radius of the mesh", r,
-                       "(0, 1] (the grain must fit in its unit bounding sphere)");
-        check_argument(m.is_watertight(), "GrainExemplar::mesh", "watertight", "no", "a closed, consistently oriented mesh");
-        check_argument(m.signed_volume() > 0.0, "GrainExemplar::mesh", "signed volume", m.signed_volume(),
-                       "> 0 (outward normals)");
+        const double r = check_grain_mesh("GrainExemplar::mesh", m);
         material.validate();
         GrainExemplar g;
         g.bvh_ = std::make_shared<const Bvh<float>>(m);
@@ -79,8 +72,7 @@ public:
     /// the analytic sphere.
     [[nodiscard]] static GrainExemplar procedural(GrainShape shape, double radius, const GrainMaterial& material,
                                                   std::uint64_t seed = 1, int level = 4) {
-        check_argument(radius > 0.0 && radius <= 1.0, "GrainExemplar::procedural", "radius", radius,
-                       "(0, 1] (the grain must fit in its unit bounding sphere)");
+        check_grain_radius("GrainExemplar::procedural", "radius", radius);
         if (shape == GrainShape::sphere) return sphere(radius, material);
         return mesh(make_grain_mesh<float>(shape, float(radius), seed, level), material);
     }
