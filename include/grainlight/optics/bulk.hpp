@@ -165,6 +165,24 @@ inline void finish_bulk_channel(BulkChannel& ch, std::span<const double> theta, 
     ch.phase_integral = 2 * pi_v<double> * i0;
     ch.g = i0 > 0 ? i1 / i0 : 0.0;
 }
+
+/// One wavelength's channel from the PSD-averaged integrands `total` = (<C_t>, <C_s>, <I(theta_k)>...)
+/// and the number density n0 (in the units that make n0 <C> a coefficient in 1/m): Eqs. 16-17.
+inline BulkChannel make_bulk_channel(double lambda, int evaluations, std::span<const double> total,
+                                     double n0, std::span<const double> theta, double k) {
+    BulkChannel ch;
+    ch.wavelength_um = lambda;
+    ch.evaluations = evaluations;
+    ch.mean_C_t = total[0];
+    ch.mean_C_s = total[1];
+    ch.mean_C_a = total[0] - total[1];
+    ch.sigma_t = n0 * ch.mean_C_t;
+    ch.sigma_s = n0 * ch.mean_C_s;
+    ch.sigma_a = n0 * ch.mean_C_a;
+    ch.mean_intensity.assign(total.begin() + 2, total.end());
+    finish_bulk_channel(ch, theta, k);
+    return ch;
+}
 }  // namespace detail
 
 /// Monodisperse medium: sigma = N_0 C(r_0) and the particle's own phase function (no quadrature).
@@ -184,19 +202,8 @@ inline void finish_bulk_channel(BulkChannel& ch, std::span<const double> theta, 
         const detail::BulkIntegrand f(model, lambda, out.theta);
         std::vector<double> v(f.size());
         f(psd.radius(), v);
-        BulkChannel ch;
-        ch.wavelength_um = lambda;
-        ch.evaluations = 1;
-        ch.mean_C_t = v[0];
-        ch.mean_C_s = v[1];
-        ch.mean_C_a = v[0] - v[1];
-        const double n0 = psd.number_density() * 1e-12;
-        ch.sigma_t = n0 * ch.mean_C_t;
-        ch.sigma_s = n0 * ch.mean_C_s;
-        ch.sigma_a = n0 * ch.mean_C_a;
-        ch.mean_intensity.assign(v.begin() + 2, v.end());
-        detail::finish_bulk_channel(ch, out.theta, f.wavenumber());
-        out.channels.push_back(std::move(ch));
+        out.channels.push_back(
+            detail::make_bulk_channel(lambda, 1, v, psd.number_density() * 1e-12, out.theta, f.wavenumber()));
     }
     return out;
 }
@@ -306,19 +313,8 @@ template <SizeDistribution Psd>
             panels[worst_i] = integrate(old.a, mid);
             panels.push_back(integrate(mid, old.b));
         }
-        BulkChannel ch;
-        ch.wavelength_um = lambda;
-        ch.evaluations = evaluations;
-        ch.mean_C_t = total[0];
-        ch.mean_C_s = total[1];
-        ch.mean_C_a = total[0] - total[1];
-        const double n0 = psd.number_density() * 1e-12;
-        ch.sigma_t = n0 * ch.mean_C_t;
-        ch.sigma_s = n0 * ch.mean_C_s;
-        ch.sigma_a = n0 * ch.mean_C_a;
-        ch.mean_intensity.assign(total.begin() + 2, total.end());
-        detail::finish_bulk_channel(ch, out.theta, f.wavenumber());
-        out.channels.push_back(std::move(ch));
+        out.channels.push_back(
+            detail::make_bulk_channel(lambda, evaluations, total, psd.number_density() * 1e-12, out.theta, f.wavenumber()));
     }
     return out;
 }
