@@ -10,6 +10,7 @@
 #include <string>
 
 #include "grainlight/media/teleportation.hpp"
+#include "grainlight/precompute/scatterometer.hpp"
 
 using namespace grainlight;
 

@@ -10,7 +10,7 @@
 #include "grainlight/phase/henyey_greenstein.hpp"
 #include "grainlight/scene/camera.hpp"
 #include "grainlight/scene/scene.hpp"
-#include "grainlight/scene/slab.hpp"
+#include "grainlight/integrators/slab.hpp"
 
 namespace gl = grainlight;
 

@@ -24,6 +24,7 @@
 #include "common/progress.hpp"
 #include "grainlight/core/statistics.hpp"
 #include "grainlight/media/teleportation.hpp"
+#include "grainlight/precompute/scatterometer.hpp"
 #include "grainlight/packing/chord_lengths.hpp"
 #include "grainlight/packing/md_packer.hpp"
 
@@ -91,7 +92,7 @@ int main(int argc, char** argv) {
             gl::ScatterometerConfig cfg;
             cfg.rays = rays;
             cfg.seed = seed;
-            const auto stats = gl::run_scatterometer(gl::ScatterometerGrain::procedural(p.shape, p.radius, p.material, p.seed), cfg);
+            const auto stats = gl::run_scatterometer(gl::ScatterometerGrain::procedural(p.shape, p.radius, p.material, p.seed, 5), cfg);
             const gl::TeleportationMedium<float> tt(stats, f, 1.0);
             const double sigma_t = (tt.params().sigma_t[0] + tt.params().sigma_t[1] + tt.params().sigma_t[2]) / 3.0;
             gl::Histogram h(0.0, zmax, bins);

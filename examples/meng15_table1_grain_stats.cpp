@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
         for (const char* preset : presets) {
             const gl::GrainPreset p = gl::grain_preset(preset);
             const gl::Meng15Table1Column& col = *gl::find_meng15_table1(p.paper_column);
-            const auto grain = gl::ScatterometerGrain::procedural(p.shape, p.radius, p.material, p.seed);
+            const auto grain = gl::ScatterometerGrain::procedural(p.shape, p.radius, p.material, p.seed, 5);
             gl::ScatterometerConfig cfg;
             cfg.rays = rays;
             cfg.seed = seed;

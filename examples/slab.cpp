@@ -19,7 +19,7 @@
 #include "common/cli.hpp"
 #include "common/output.hpp"
 #include "common/progress.hpp"
-#include "grainlight/scene/slab.hpp"
+#include "grainlight/integrators/slab.hpp"
 
 int main(int argc, char** argv) {
     return gl_examples::run_main("slab", [&]() -> int {

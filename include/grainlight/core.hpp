@@ -1,5 +1,5 @@
 /// @file grainlight/core.hpp
-/// Umbrella header for the core layer (cheap: GLM only).
+/// Umbrella header for the core layer (cheap: GLM and the standard library only).
 #pragma once
 
 #include "grainlight/core/config.hpp"
@@ -13,4 +13,5 @@
 #include "grainlight/core/spectrum.hpp"
 #include "grainlight/core/statistics.hpp"
 #include "grainlight/core/vector.hpp"
+#include "grainlight/core/serialization.hpp"
 #include "grainlight/core/warp.hpp"

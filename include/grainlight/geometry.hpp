@@ -5,6 +5,8 @@
 
 #include "grainlight/geometry/aabb.hpp"
 #include "grainlight/geometry/bvh.hpp"
+#include "grainlight/geometry/grain.hpp"
+#include "grainlight/geometry/grain_walk.hpp"
 #include "grainlight/geometry/grains.hpp"
 #include "grainlight/geometry/sphere.hpp"
 #include "grainlight/geometry/transform.hpp"

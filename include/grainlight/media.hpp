@@ -5,5 +5,6 @@
 
 #include "grainlight/media/concepts.hpp"
 #include "grainlight/media/continuous.hpp"
+#include "grainlight/media/medium_set.hpp"
 #include "grainlight/media/shell.hpp"
 #include "grainlight/media/teleportation.hpp"

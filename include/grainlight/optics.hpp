@@ -9,4 +9,5 @@
 #include "grainlight/optics/lorenz_mie.hpp"
 #include "grainlight/optics/particle.hpp"
 #include "grainlight/optics/psd.hpp"
+#include "grainlight/optics/mie_phase.hpp"
 #include "grainlight/phase/mie.hpp"

@@ -9,4 +9,4 @@
 #include "grainlight/packing/packing_library.hpp"
 #include "grainlight/packing/periodic_tile.hpp"
 #include "grainlight/packing/poisson.hpp"
-#include "grainlight/precompute/serialization.hpp"
+#include "grainlight/core/serialization.hpp"

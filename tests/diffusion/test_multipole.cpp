@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "grainlight/diffusion.hpp"
-#include "grainlight/scene/slab.hpp"
+#include "grainlight/integrators/slab.hpp"
 
 using namespace grainlight;
 

@@ -28,7 +28,7 @@
 #include <random>
 #include <vector>
 
-#include "grainlight/scene/slab.hpp"
+#include "grainlight/integrators/slab.hpp"
 
 using namespace grainlight;
 

@@ -10,6 +10,7 @@
 #include "common/chi2.hpp"
 #include "grainlight/optics/goa.hpp"
 #include "grainlight/optics/lorenz_mie.hpp"
+#include "grainlight/optics/mie_phase.hpp"
 #include "grainlight/phase/concepts.hpp"
 #include "grainlight/phase/mie.hpp"
 
@@ -74,7 +75,7 @@ TEST_CASE("MiePhase: forward peak resolved, mean cosine = Mie g, sample directio
     // x = 1000: the table's shape across the diffraction peak follows exact Mie.
     const double x = 1000;
     const LorenzMie mie(C(1.33, 0), x);
-    const auto p = MiePhase<double, Grey>::from_mie(C(1.33, 0), x);
+    const auto p = make_mie_phase<double, Grey>(C(1.33, 0), x);
     auto exact = [&](double th) {
         const auto s = mie.amplitudes(std::cos(th));
         return std::norm(s.S1) + std::norm(s.S2);
@@ -87,7 +88,7 @@ TEST_CASE("MiePhase: forward peak resolved, mean cosine = Mie g, sample directio
     // Mean cosine of the table vs the Mie series g (x = 5 and 50: fringes resolved by 600 tail nodes).
     for (double xx : {5.0, 50.0}) {
         const auto q = LorenzMie(C(1.33, 0), xx).efficiencies();
-        CHECK(MiePhase<double, Grey>::from_mie(C(1.33, 0), xx).mean_cosine()[0] == Approx(q.g).margin(2e-3));
+        CHECK(make_mie_phase<double, Grey>(C(1.33, 0), xx).mean_cosine()[0] == Approx(q.g).margin(2e-3));
     }
     // Convention: u.x -> 1 samples forward (cos theta -> +1) around w_in.
     const Vec3d w_in(1, 0, 0);

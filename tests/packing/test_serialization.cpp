@@ -1,4 +1,4 @@
-// Tests of the shared container format (grainlight/precompute/serialization.hpp): round trip,
+// Tests of the shared container format (grainlight/core/serialization.hpp): round trip,
 // and every corruption a loader must reject with grainlight::format_error.
 #include <catch2/catch.hpp>
 
@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "grainlight/precompute/serialization.hpp"
+#include "grainlight/core/serialization.hpp"
 
 using namespace grainlight;
 

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "grainlight/media/teleportation.hpp"
+#include "grainlight/precompute/scatterometer.hpp"
 
 using namespace grainlight;
 

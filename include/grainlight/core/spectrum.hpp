@@ -9,6 +9,9 @@
 #include <cmath>
 #include <concepts>
 #include <cstddef>
+#include <cstdint>
+#include <initializer_list>
+#include <span>
 #include <ostream>
 
 #include "grainlight/core/config.hpp"
@@ -107,6 +110,87 @@ template <std::size_t N, class F>
 struct is_spectrum<Spectrum<N, F>> : std::true_type {};
 template <class T>
 concept SpectrumType = is_spectrum<T>::value;
+
+/// Per-channel values of a material (albedo, absorption, ...) whose channel count is chosen by the
+/// data, not by the renderer's Spectrum type: one value (grey: the same in every channel of any
+/// spectrum), three (RGB) or any count up to `max_channels` (e.g. Guo21's 8 wavelength samples).
+/// A renderer with `Spectrum<N>` may use values with 1 or N channels, or any grey values
+/// (`compatible_with(N)`); anything else is a mismatch that the render entry points reject with an
+/// error instead of folding channels (channel c of an 8-channel render never reads RGB's blue).
+class ChannelValues {
+public:
+    static constexpr std::size_t max_channels = 16;
+
+    /// Grey 0.
+    constexpr ChannelValues() noexcept = default;
+    /// Grey: every channel = v.
+    constexpr ChannelValues(double v) noexcept : n_(1) { v_[0] = v; }  // NOLINT: implicit on purpose
+    /// One value per channel of a Spectrum (RGBd{...} stays valid wherever an RGB value was taken).
+    template <std::size_t N, class F>
+        requires(N <= max_channels)
+    constexpr ChannelValues(const Spectrum<N, F>& s) noexcept : n_(std::uint8_t(N)) {  // NOLINT: implicit on purpose
+        for (std::size_t i = 0; i < N; ++i) v_[i] = double(s[i]);
+    }
+    /// Explicit values, 1..max_channels of them (more are ignored: see size()).
+    ChannelValues(std::initializer_list<double> values) noexcept : ChannelValues(std::span<const double>(values.begin(), values.size())) {}
+    explicit ChannelValues(std::span<const double> values) noexcept
+        : n_(std::uint8_t(std::clamp<std::size_t>(values.size(), 1, max_channels))) {
+        for (std::size_t i = 0; i < n_ && i < values.size(); ++i) v_[i] = values[i];
+    }
+
+    /// Number of stored channels (1 = grey).
+    [[nodiscard]] constexpr std::size_t size() const noexcept { return n_; }
+    /// Value in channel c: the grey value for a 1-channel set, else channel c (c < size()).
+    [[nodiscard]] constexpr double operator[](std::size_t c) const noexcept {
+        const std::size_t last = std::size_t(std::max<std::uint8_t>(n_, 1)) - 1;
+        return v_[std::min(c, last)];
+    }
+    [[nodiscard]] constexpr double at(std::size_t c) const noexcept { return (*this)[c]; }
+    /// Every stored channel equal.
+    [[nodiscard]] constexpr bool is_grey() const noexcept {
+        for (std::size_t i = 1; i < n_; ++i)
+            if (v_[i] != v_[0]) return false;
+        return true;
+    }
+    /// Usable by a renderer with `channels` spectrum channels: 1 stored value, exactly `channels`,
+    /// or grey.
+    [[nodiscard]] constexpr bool compatible_with(std::size_t channels) const noexcept {
+        return n_ == 1 || n_ == channels || is_grey();
+    }
+    [[nodiscard]] constexpr double mean() const noexcept {
+        double s = 0;
+        for (std::size_t i = 0; i < n_; ++i) s += v_[i];
+        return s / double(n_);
+    }
+    [[nodiscard]] constexpr double max_value() const noexcept {
+        double m = v_[0];
+        for (std::size_t i = 1; i < n_; ++i) m = std::max(m, v_[i]);
+        return m;
+    }
+    /// As a Spectrum<N, F> (requires compatible_with(N); otherwise the last stored channel repeats).
+    template <class S>
+        requires SpectrumType<S>
+    [[nodiscard]] constexpr S to_spectrum() const noexcept {
+        S r;
+        for (std::size_t i = 0; i < S::size; ++i) r[i] = typename S::value_type((*this)[i]);
+        return r;
+    }
+    friend constexpr bool operator==(const ChannelValues& a, const ChannelValues& b) noexcept {
+        if (a.n_ != b.n_) return false;
+        for (std::size_t i = 0; i < a.n_; ++i)
+            if (a.v_[i] != b.v_[i]) return false;
+        return true;
+    }
+    friend std::ostream& operator<<(std::ostream& os, const ChannelValues& s) {
+        os << "[";
+        for (std::size_t i = 0; i < s.n_; ++i) os << (i ? ", " : "") << s.v_[i];
+        return os << "]";
+    }
+
+private:
+    std::array<double, max_channels> v_{};
+    std::uint8_t n_ = 1;
+};
 
 /// Luminance of a linear-sRGB value (Rec. 709 weights).
 template <class F>

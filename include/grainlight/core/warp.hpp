@@ -52,6 +52,32 @@ template <std::floating_point F>
     }
     return Vec2<F>(r * std::cos(theta), r * std::sin(theta));
 }
+/// Inverse of sample_uniform_disk_concentric (Shirley & Chiu 1997): a point of the closed unit
+/// disk to [0,1]^2. Round trip exact up to rounding.
+template <std::floating_point F>
+[[nodiscard]] inline Vec2<F> inverse_disk_concentric(Vec2<F> p) noexcept {
+    const F r = std::sqrt(p.x * p.x + p.y * p.y);
+    if (!(r > F(0))) return Vec2<F>(F(0.5), F(0.5));
+    constexpr F q = pi_v<F> / F(4);
+    F phi = std::atan2(p.y, p.x);  // (-pi, pi]
+    if (phi < -q) phi += F(2) * pi_v<F>;  // [-pi/4, 7pi/4)
+    F ox, oy;
+    if (phi < q) {
+        ox = r;
+        oy = ox * phi / q;
+    } else if (phi < F(3) * q) {
+        oy = r;
+        ox = oy * (F(2) * q - phi) / q;
+    } else if (phi < F(5) * q) {
+        ox = -r;
+        oy = ox * (phi - pi_v<F>) / q;
+    } else {
+        oy = -r;
+        ox = oy * (F(2) * q - (phi - pi_v<F>)) / q;
+    }
+    return Vec2<F>(std::clamp((ox + F(1)) / F(2), F(0), F(1)), std::clamp((oy + F(1)) / F(2), F(0), F(1)));
+}
+
 /// Uniform point on the unit disk, polar mapping: area pdf 1/pi.
 template <std::floating_point F>
 [[nodiscard]] inline Vec2<F> sample_uniform_disk_polar(Vec2<F> u) noexcept {
@@ -105,6 +131,14 @@ template <std::floating_point F>
 [[nodiscard]] inline Vec2<F> sample_uniform_triangle(Vec2<F> u) noexcept {
     const F su0 = std::sqrt(u.x);
     return Vec2<F>(F(1) - su0, u.y * su0);
+}
+
+/// Multiple importance sampling: power heuristic weight (beta = 2) of a strategy with pdf a against
+/// one with pdf b (Veach 1997); 0 when both pdfs are 0.
+template <std::floating_point F>
+[[nodiscard]] inline F power_heuristic(F a, F b) noexcept {
+    const F a2 = a * a, b2 = b * b;
+    return a2 + b2 > F(0) ? a2 / (a2 + b2) : F(0);
 }
 
 }  // namespace grainlight

@@ -240,17 +240,19 @@ enum class GrainMaterialKind {
     return "?";
 }
 
-/// Grain material, per RGB channel where it varies. Lengths (interior coefficients) are in units
+/// Grain material, per channel where it varies (ChannelValues: grey, RGB or any number of spectral
+/// samples; a render with Spectrum<N> accepts grey values or exactly N channels, see
+/// `compatible_with`). Lengths (interior coefficients) are in units
 /// of the *bounding-sphere* radius (the scatterometer's unit), so sigma_a = 1 means one mean free
 /// path per bounding-sphere radius.
 struct GrainMaterial {
     /// Which model applies.
     GrainMaterialKind kind = GrainMaterialKind::dielectric;
     double ior = 1.5;                          ///< relative index of refraction (> 0, != 1 allowed)
-    RGBd interior_sigma_a{0.0, 0.0, 0.0};      ///< absorption coefficient inside (absorbing_dielectric)
-    RGBd interior_sigma_s{0.0, 0.0, 0.0};      ///< scattering coefficient inside (absorbing_dielectric)
+    ChannelValues interior_sigma_a{0.0};       ///< absorption coefficient inside (absorbing_dielectric)
+    ChannelValues interior_sigma_s{0.0};       ///< scattering coefficient inside (absorbing_dielectric)
     double interior_g = 0.0;                   ///< HG asymmetry of the interior phase function (0 = isotropic)
-    RGBd albedo{0.8, 0.8, 0.8};                ///< Lambertian albedo (diffuse)
+    ChannelValues albedo{0.8};                 ///< Lambertian albedo (diffuse)
 
     /// Smooth lossless dielectric of relative index `ior` (validated).
     [[nodiscard]] static GrainMaterial make_dielectric(double ior) {
@@ -261,7 +263,7 @@ struct GrainMaterial {
         return m;
     }
     /// Dielectric enclosing a medium (sigma per bounding radius, HG g), validated.
-    [[nodiscard]] static GrainMaterial make_absorbing_dielectric(double ior, RGBd sigma_a, RGBd sigma_s = RGBd(0.0),
+    [[nodiscard]] static GrainMaterial make_absorbing_dielectric(double ior, ChannelValues sigma_a, ChannelValues sigma_s = 0.0,
                                                                  double g = 0.0) {
         GrainMaterial m;
         m.kind = GrainMaterialKind::absorbing_dielectric;
@@ -273,7 +275,7 @@ struct GrainMaterial {
         return m;
     }
     /// Lambertian grain with per-channel albedo in [0, 1] (validated).
-    [[nodiscard]] static GrainMaterial make_diffuse(RGBd albedo) {
+    [[nodiscard]] static GrainMaterial make_diffuse(ChannelValues albedo) {
         GrainMaterial m;
         m.kind = GrainMaterialKind::diffuse;
         m.albedo = albedo;
@@ -284,24 +286,43 @@ struct GrainMaterial {
     [[nodiscard]] bool is_grey() const noexcept {
         switch (kind) {
             case GrainMaterialKind::dielectric: return true;
-            case GrainMaterialKind::absorbing_dielectric:
-                return interior_sigma_a[0] == interior_sigma_a[1] && interior_sigma_a[1] == interior_sigma_a[2] &&
-                       interior_sigma_s[0] == interior_sigma_s[1] && interior_sigma_s[1] == interior_sigma_s[2];
-            case GrainMaterialKind::diffuse: return albedo[0] == albedo[1] && albedo[1] == albedo[2];
+            case GrainMaterialKind::absorbing_dielectric: return interior_sigma_a.is_grey() && interior_sigma_s.is_grey();
+            case GrainMaterialKind::diffuse: return albedo.is_grey();
         }
         return true;
+    }
+    /// Number of channels the material varies over (1 when grey; else the channel count of its
+    /// non-grey values).
+    [[nodiscard]] std::size_t channels() const noexcept {
+        std::size_t n = 1;
+        for (const ChannelValues* v : {&interior_sigma_a, &interior_sigma_s, &albedo})
+            if (!v->is_grey()) n = std::max(n, v->size());
+        return n;
+    }
+    /// Usable by a render with `n` spectrum channels (every non-grey value has exactly n channels).
+    [[nodiscard]] bool compatible_with(std::size_t n) const noexcept {
+        return interior_sigma_a.compatible_with(n) && interior_sigma_s.compatible_with(n) && albedo.compatible_with(n);
+    }
+    /// Throws grainlight::invalid_argument unless the material can be rendered with `n` channels.
+    void check_channels(std::size_t n, const char* where) const {
+        check_argument(compatible_with(n), where, "material channels", channels(),
+                       "1 (grey) or " + std::to_string(n) + " (the spectrum's channel count)");
     }
     /// Throws grainlight::invalid_argument naming the bad parameter.
     void validate() const {
         const char* where = "GrainMaterial";
         check_argument(ior > 0.0 && std::isfinite(ior), where, "ior", ior, "(0, inf)");
-        for (int c = 0; c < 3; ++c) {
+        for (std::size_t c = 0; c < interior_sigma_a.size(); ++c)
             check_argument(interior_sigma_a[c] >= 0.0 && std::isfinite(interior_sigma_a[c]), where, "interior_sigma_a",
                            interior_sigma_a[c], "[0, inf)");
+        for (std::size_t c = 0; c < interior_sigma_s.size(); ++c)
             check_argument(interior_sigma_s[c] >= 0.0 && std::isfinite(interior_sigma_s[c]), where, "interior_sigma_s",
                            interior_sigma_s[c], "[0, inf)");
+        for (std::size_t c = 0; c < albedo.size(); ++c)
             check_argument(albedo[c] >= 0.0 && albedo[c] <= 1.0, where, "albedo", albedo[c], "[0, 1]");
-        }
+        const std::size_t n = channels();
+        check_argument(compatible_with(n), where, "channel counts", n,
+                       "every non-grey value (interior_sigma_a, interior_sigma_s, albedo) with the same count");
         check_argument(interior_g > -1.0 && interior_g < 1.0, where, "interior_g", interior_g, "(-1, 1)");
     }
 };

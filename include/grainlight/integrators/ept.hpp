@@ -34,9 +34,12 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <concepts>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <span>
+#include <utility>
 #include <vector>
 
 #include "grainlight/core/error.hpp"
@@ -46,6 +49,7 @@
 #include "grainlight/core/rng.hpp"
 #include "grainlight/core/spectrum.hpp"
 #include "grainlight/core/warp.hpp"
+#include "grainlight/geometry/grain_walk.hpp"
 #include "grainlight/integrators/render.hpp"
 #include "grainlight/integrators/vpt.hpp"
 #include "grainlight/integrators/walk.hpp"
@@ -69,16 +73,7 @@ struct EptOptions {
     TransportMode mode = TransportMode::radiance;
 };
 
-/// Outcome of a grain sojourn.
-struct GrainSojourn {
-    enum Kind : std::uint8_t { exited, absorbed } kind = absorbed;
-    Vec3d p{0.0};          ///< where the path leaves the grain surface (offset outward)
-    Vec3d d{0.0};          ///< direction it leaves in
-    Vec3d n{0.0};          ///< outward normal at the last surface event
-    bool specular = true;  ///< last event was a delta event (false: Lambertian)
-    double pdf = 0;        ///< solid-angle pdf of the last direction (Lambertian), else 0
-    int events = 0;        ///< surface + interior scattering events
-};
+// GrainSojourn (the outcome of a walk inside a grain) is defined in geometry/grain_walk.hpp.
 
 namespace detail {
 
@@ -87,102 +82,32 @@ namespace detail {
 
 }  // namespace detail
 
-/// A path travelling along `d` hits grain `g` of `agg` at `p` (outward normal `n`). Simulate it
-/// until it leaves the grain's surface outward (kind = exited) or is absorbed. `throughput`
-/// is updated (per channel). `on_diffuse(p, n_facing, throughput)` is called at each
-/// Lambertian grain event before the bounce (NEE); `on_segment(a, b)` for every straight piece
-/// travelled inside the grain. `events` counts toward a budget of `max_events`.
+/// A path travelling along `d` hits grain `g` of `agg` at `p` (outward normal `n`): the weighted
+/// grain walk of geometry/grain_walk.hpp in world units (interior coefficients are per
+/// bounding-sphere radius, divided by the aggregate's grain radius R), through the aggregate's
+/// instance of the grain. Ends when the path leaves the grain's surface outward (kind = exited),
+/// or is absorbed / runs out of events (any other kind). `throughput` is updated per channel.
+/// `on_diffuse(p, n_facing, throughput)` is called at each Lambertian grain event before the
+/// bounce (NEE); `on_segment(a, b)` for every straight piece travelled inside the grain. `events`
+/// counts toward a budget of `max_events`.
 template <BoundaryShape Shape, class S, class OnDiffuse, class OnSegment>
 [[nodiscard]] GrainSojourn grain_sojourn(const GranularAggregate<Shape>& agg, const AggregateGrain& g, Vec3d p, Vec3d d,
                                          Vec3d n, S& throughput, Rng& rng, TransportMode mode, int max_events,
                                          OnDiffuse&& on_diffuse, OnSegment&& on_segment) noexcept {
-    using F = typename S::value_type;
-    const GrainMaterial& m = agg.exemplars()[g.exemplar].material();
     const double R = agg.grain_radius();
-    const double eps = detail::grain_surface_epsilon(R);
-    GrainSojourn out;
-    // Interior medium (absorbing dielectric), world units.
-    double sig_a[3] = {0, 0, 0}, sig_s[3] = {0, 0, 0}, s_max = 0, s_mean = 0;
-    const bool medium = m.kind == GrainMaterialKind::absorbing_dielectric;
-    if (medium)
-        for (int c = 0; c < 3; ++c) {
-            sig_a[c] = m.interior_sigma_a[c] / R;
-            sig_s[c] = m.interior_sigma_s[c] / R;
-            s_max = std::max(s_max, sig_s[c]);
-            s_mean += sig_s[c] / 3.0;
-        }
-    bool inside = false;   // travelling inside the grain
-    bool at_surface = true;
-    for (; out.events < max_events;) {
-        if (at_surface) {
-            ++out.events;
-            const bool from_outside = glm::dot(d, n) < 0;
-            if (m.kind == GrainMaterialKind::diffuse) {
-                if (!from_outside) return out;  // cannot happen for an opaque grain: treat as absorbed
-                on_diffuse(p, n, throughput);
-                const Vec3d local = sample_cosine_hemisphere(rng.uniform2<double>());
-                const Vec3d w = glm::normalize(Frame<double>(n).to_world(local));
-                for (std::size_t c = 0; c < S::size; ++c) throughput[c] *= F(m.albedo[std::min<std::size_t>(c, 2)]);
-                out.kind = GrainSojourn::exited;
-                out.p = p + eps * n;
-                out.d = w;
-                out.n = n;
-                out.specular = false;
-                out.pdf = cosine_hemisphere_pdf(local.z);
-                return out;
-            }
-            bool refracted = false;
-            double eta_rel = 1;
-            const Vec3d w = sample_dielectric(d, n, m.ior, rng.uniform<double>(), refracted, eta_rel);
-            if (refracted && mode == TransportMode::radiance) throughput /= F(eta_rel * eta_rel);
-            inside = refracted ? from_outside : !from_outside;
-            d = w;
-            p = p + (glm::dot(d, n) >= 0 ? eps : -eps) * n;
-            if (!inside) {
-                out.kind = GrainSojourn::exited;
-                out.p = p;
-                out.d = d;
-                out.n = n;
-                out.specular = true;
-                out.pdf = 0;
-                return out;
-            }
-        }
-        // Inside the grain: next surface, or an interior event.
-        const AggregateHit h = agg.intersect_grain(g, p, d, 0.0, 4.0 * R);
-        if (!h) return out;  // leaked through the mesh (not for watertight grains): absorbed
-        double t = h.t;
-        at_surface = true;
-        if (medium && s_max > 0) {
-            const double ts = sample_exponential(rng.uniform<double>(), s_max);
-            if (ts < t) {
-                t = ts;
-                at_surface = false;
-            }
-        }
-        if (medium)
-            for (std::size_t c = 0; c < S::size; ++c) throughput[c] *= F(std::exp(-sig_a[std::min<std::size_t>(c, 2)] * t));
-        const Vec3d q = p + t * d;
-        on_segment(p, q);
-        p = q;
-        if (at_surface) {
-            n = h.n;
-            continue;
-        }
-        // Weighted delta tracking against the majorant s_max: real scatter with prob s_mean/s_max.
-        const double P = s_mean / s_max;
-        if (rng.uniform<double>() < P) {
-            ++out.events;
-            for (std::size_t c = 0; c < S::size; ++c) throughput[c] *= F(sig_s[std::min<std::size_t>(c, 2)] / (P * s_max));
-            const double mu = sample_henyey_greenstein_cos(rng.uniform<double>(), m.interior_g);
-            d = glm::normalize(direction_from_cosine(d, mu, 2.0 * pi_v<double> * rng.uniform<double>()));
-        } else if (P < 1) {
-            for (std::size_t c = 0; c < S::size; ++c)
-                throughput[c] *= F((1.0 - sig_s[std::min<std::size_t>(c, 2)] / s_max) / (1.0 - P));
-        }
-        if (throughput.is_black()) return out;
-    }
-    return out;
+    GrainWalkOptions opt;
+    opt.estimator = GrainEstimator::weighted;
+    opt.mode = mode;
+    opt.max_events = max_events;
+    auto intersect = [&](const Vec3d& o, const Vec3d& w, double& t, Vec3d& nn) {
+        const AggregateHit h = agg.intersect_grain(g, o, w, 0.0, 4.0 * R);
+        if (!h) return false;
+        t = h.t;
+        nn = h.n;
+        return true;
+    };
+    return grain_walk(agg.exemplars()[g.exemplar].material(), R, detail::grain_surface_epsilon(R), intersect, p, d, n,
+                      throughput, rng, opt, on_diffuse, on_segment);
 }
 
 /// One complete grain interaction of a photon walk (Meng15 Sec. 4.1's TSDF quantities).
@@ -192,8 +117,9 @@ struct GrainInteraction {
     Vec3d x_o{0.0}, w_o{0.0};  ///< exit point from the bounding sphere and exit direction (if not absorbed)
     double flight = 0;         ///< distance from the previous exit point (or walk start) to x_i
     bool absorbed = false;
-    RGBd survival{1.0, 1.0, 1.0};  ///< per-channel throughput ratio over the interaction (the
-                                   ///< grain's survival weight; 1 for lossless grains)
+    ChannelValues survival{1.0};  ///< per-channel throughput ratio over the interaction (the
+                                  ///< grain's survival weight; 1 for lossless grains), one value
+                                  ///< per channel of the walk's spectrum
     int index = 0;             ///< 1 for the first interaction of the walk
 };
 
@@ -238,11 +164,12 @@ PhotonWalkEnd ept_photon_walk(const GranularAggregate<Shape>& agg, Vec3d p, Vec3
         if (!seg(p, q)) return PhotonWalkEnd::stopped;
         Vec3d n = h.n;
         const S before = throughput;
+        static_assert(S::size <= ChannelValues::max_channels, "ept_photon_walk: too many spectrum channels");
         auto set_survival = [&]() {
-            for (std::size_t ch = 0; ch < 3; ++ch) {
-                const std::size_t k = std::min<std::size_t>(ch, S::size - 1);
-                gi.survival[ch] = before[k] > F(0) ? double(throughput[k]) / double(before[k]) : 0.0;
-            }
+            std::array<double, S::size> ratio{};
+            for (std::size_t ch = 0; ch < S::size; ++ch)
+                ratio[ch] = before[ch] > F(0) ? double(throughput[ch]) / double(before[ch]) : 0.0;
+            gi.survival = ChannelValues(std::span<const double>(ratio));
         };
         for (;;) {
             const GrainSojourn s = grain_sojourn(
@@ -252,10 +179,10 @@ PhotonWalkEnd ept_photon_walk(const GranularAggregate<Shape>& agg, Vec3d p, Vec3
                 });
             events += s.events;
             if (stop) return PhotonWalkEnd::stopped;
-            if (s.kind == GrainSojourn::absorbed) {
+            if (!s.is_exited()) {
                 gi.absorbed = true;
                 gi.x_o = q;
-                gi.survival = RGBd(0.0);
+                gi.survival = ChannelValues(0.0);
                 if constexpr (requires { cb.on_interaction(gi); }) (void)cb.on_interaction(gi);
                 return events >= max_events ? PhotonWalkEnd::max_events : PhotonWalkEnd::absorbed;
             }
@@ -338,7 +265,7 @@ template <BoundaryShape Shape>
             double* sum_f;
             bool on_interaction(const GrainInteraction& gi) {
                 if (gi.index > skip) {
-                    const double surv = (gi.survival[0] + gi.survival[1] + gi.survival[2]) / 3.0;
+                    const double surv = gi.survival.mean();
                     const double tele = gi.absorbed ? 0.0 : surv * glm::dot(gi.x_o - gi.x_i, gi.w_i);
                     zs->push_back(gi.flight + tele);
                     *sum_f += gi.flight;
@@ -403,121 +330,213 @@ struct EptRadiance {
     std::uint64_t grain_rays = 0;  ///< aggregate traversals (Algorithm 1 calls) made
 };
 
-/// Radiance arriving along camera ray (o, d) (scene frame = the aggregate's anchor frame) in a
-/// scene `scene` (LitScene: lights, ground, other surfaces; the aggregate is not one of its
-/// shapes) containing the aggregate `agg`. The camera is outside every medium and grain.
-template <LitScene Scene, BoundaryShape Shape>
-[[nodiscard]] EptRadiance<typename Scene::Spectrum> ept_radiance(const Scene& scene, const GranularAggregate<Shape>& agg,
-                                                                 const Ray<typename Scene::Float>& ray, Rng& rng,
-                                                                 const EptOptions& opt = {}) noexcept {
-    using F = typename Scene::Float;
-    using S = typename Scene::Spectrum;
-    EptRadiance<S> out;
-    Vec3d p(ray.o), d(glm::normalize(Vec3d(ray.d)));
-    S beta(F(1));
-    bool specular = true;
-    double last_pdf = 0;
-    Vec3d last_p = p;
-    int order = 0, events = 0;
+/// State of one EPT camera path between steps (the variables of the camera-path loop), public so
+/// that integrators built on EPT (the Meng15 hybrid, a user's own) advance a path one event at a
+/// time with `ept_step` and stay EPT by construction.
+template <class S>
+struct EptPathState {
+    Vec3d p{0.0}, d{0.0, 0.0, 1.0};  ///< current origin and unit direction
+    S beta{1.0f};                    ///< path throughput
+    bool specular = true;            ///< last bounce was a delta event (no MIS on emission)
+    double last_pdf = 0;             ///< solid-angle pdf of the last (non-delta) bounce
+    Vec3d last_p{0.0};               ///< where that bounce happened
+    int order = 0;                   ///< grain interactions so far
+    int events = 0;                  ///< surface + interior events so far
     bool have_last_grain = false;
     AggregateGrain last_grain{};
+    bool high = false;               ///< contributions go to the high-order part from now on
+    int low_order_max = std::numeric_limits<int>::max();  ///< ... and so do those of paths past this order
+
+    /// A camera path starting at `ray` (outside every grain and medium), splitting its radiance at
+    /// `low_order_max` grain interactions.
+    template <class F>
+    [[nodiscard]] static EptPathState start(const Ray<F>& ray, int low_order_max) noexcept {
+        EptPathState ps;
+        ps.p = Vec3d(ray.o);
+        ps.d = glm::normalize(Vec3d(ray.d));
+        ps.last_p = ps.p;
+        ps.low_order_max = low_order_max;
+        return ps;
+    }
+    /// Whether a contribution now is high order.
+    [[nodiscard]] bool contributes_high() const noexcept { return high || order > low_order_max; }
+};
+
+/// What `ept_step` did.
+enum class EptStep : std::uint8_t {
+    next,        ///< the path continues: call ept_step again
+    finished,    ///< the path ended (escaped, absorbed, roulette, event budget)
+    switch_here  ///< the switch policy chose to leave EPT at the grain hit `x_switch` (not consumed)
+};
+
+/// A switch policy's answer at a grain hit.
+enum class EptSwitch : std::uint8_t {
+    stay,            ///< continue in EPT
+    switch_here,     ///< leave EPT here (ept_step returns EptStep::switch_here)
+    high_from_here   ///< stay in EPT, but count every later contribution as high order
+};
+
+/// The switch policy of plain EPT: never leave.
+struct NeverSwitch {
+    template <class S>
+    [[nodiscard]] constexpr EptSwitch operator()(const EptPathState<S>&, const Vec3d&, bool) const noexcept {
+        return EptSwitch::stay;
+    }
+};
+
+/// Switch policies: called at every grain hit of a path with its state, the hit point and whether
+/// it is the same grain as the previous interaction.
+template <class P, class S>
+concept EptSwitchPolicy = requires(P& p, const EptPathState<S>& ps, const Vec3d& x, bool same) {
+    { p(ps, x, same) } -> std::convertible_to<EptSwitch>;
+};
+
+/// One event of an EPT camera path (Meng15 Sec. 3.2): the next scene surface or grain along the
+/// path, the grain sojourn or the surface bounce with NEE at diffuse points (MIS, power heuristic)
+/// and emission with MIS, then Russian roulette. Contributions go to `low` or `high` by
+/// `ps.contributes_high()`; Algorithm 1 traversals are counted in `grain_rays`. `policy` is asked
+/// at each grain hit (before it is consumed) whether to switch; on EptSwitch::switch_here the hit
+/// is counted as a new interaction, `x_switch` receives the hit point and EptStep::switch_here is
+/// returned. Random numbers are consumed in the same order whatever the policy says until it
+/// switches, so a path is EPT by construction up to its switch.
+template <LitScene Scene, BoundaryShape Shape, class Policy = NeverSwitch>
+    requires EptSwitchPolicy<Policy, typename Scene::Spectrum>
+[[nodiscard]] EptStep ept_step(const Scene& scene, const GranularAggregate<Shape>& agg,
+                               EptPathState<typename Scene::Spectrum>& ps, typename Scene::Spectrum& low,
+                               typename Scene::Spectrum& high, std::uint64_t& grain_rays, Rng& rng, const EptOptions& opt,
+                               Policy&& policy, Vec3d& x_switch) noexcept {
+    using F = typename Scene::Float;
+    using S = typename Scene::Spectrum;
+    if (ps.events >= opt.max_events) return EptStep::finished;
     const double R = agg.grain_radius();
+    Vec3d& p = ps.p;
+    Vec3d& d = ps.d;
+    S& beta = ps.beta;
 
     auto add = [&](const S& L) {
-        if (order <= opt.low_order_max)
-            out.low += L;
+        if (ps.contributes_high())
+            high += L;
         else
-            out.high += L;
+            low += L;
     };
     auto mis_emission = [&](const S& Le, const SurfaceHit<F, S>& hit) {
         if (Le.is_black()) return;
         double w = 1;
-        if (opt.nee && !specular) {
-            const double pl = double(scene.light_pdf(Vec3<F>(last_p), Vec3<F>(d), hit));
-            w = power_heuristic(last_pdf, pl);
+        if (opt.nee && !ps.specular) {
+            const double pl = double(scene.light_pdf(Vec3<F>(ps.last_p), Vec3<F>(d), hit));
+            w = power_heuristic(ps.last_pdf, pl);
         }
         add(beta * Le * F(w));
     };
     // NEE from a Lambertian point (n facing the arriving path) with albedo rho.
     auto nee_diffuse = [&](const Vec3d& x, const Vec3d& nf, const S& rho, const S& thr) {
-        if (opt.nee) add(detail::ept_nee_lambertian(scene, agg, rng, R, x, nf, rho, thr, out.grain_rays));
+        if (opt.nee) add(detail::ept_nee_lambertian(scene, agg, rng, R, x, nf, rho, thr, grain_rays));
     };
 
-    while (events < opt.max_events) {
-        const Ray<F> r{Vec3<F>(p), Vec3<F>(d)};
-        const SurfaceHit<F, S> sh = scene.intersect(r);
-        const double t_s = sh.hit() ? double(sh.t) : 1e30;
-        ++out.grain_rays;
-        const AggregateHit gh = agg.intersect(p, d, 0.0, t_s);
-        if (gh) {
-            // A grain interaction (a new one unless the same grain is hit again right away).
-            if (!(have_last_grain && last_grain.tile == gh.grain.tile && last_grain.sphere == gh.grain.sphere)) ++order;
-            have_last_grain = true;
-            last_grain = gh.grain;
-            const GrainSojourn s = grain_sojourn(
-                agg, gh.grain, p + gh.t * d, d, gh.n, beta, rng, opt.mode, opt.max_events - events,
-                [&](const Vec3d& x, const Vec3d& n, S& thr) {
-                    const GrainMaterial& m = agg.exemplars()[gh.grain.exemplar].material();
-                    S rho;
-                    for (std::size_t c = 0; c < S::size; ++c) rho[c] = F(m.albedo[std::min<std::size_t>(c, 2)]);
-                    nee_diffuse(x, n, rho, thr);
-                },
-                [](const Vec3d&, const Vec3d&) {});
-            events += s.events;
-            if (s.kind == GrainSojourn::absorbed || beta.is_black()) break;
-            last_p = s.p;
-            p = s.p;
-            d = s.d;
-            specular = s.specular;
-            last_pdf = s.pdf;
-        } else if (!sh.hit()) {
-            mis_emission(scene.environment(Vec3<F>(d)), SurfaceHit<F, S>{});
-            break;
-        } else {
-            const Vec3d x = p + t_s * d;
-            const Vec3d n(sh.n);
-            if (sh.light >= 0) mis_emission(scene.emitted(sh, Vec3<F>(d)), sh);
-            const bool from_outside = glm::dot(d, n) < 0;
-            have_last_grain = false;
-            if (sh.type == SurfaceType::absorber) break;
-            if (sh.type == SurfaceType::passthrough) {
-                p = x + (from_outside ? -1e-5 : 1e-5) * n;
-                continue;
-            }
-            ++events;
-            if (sh.type == SurfaceType::diffuse) {
-                const Vec3d nf = from_outside ? n : -n;
-                nee_diffuse(x, nf, sh.reflectance, beta);
-                const Vec3d local = sample_cosine_hemisphere(rng.uniform2<double>());
-                d = glm::normalize(Frame<double>(nf).to_world(local));
-                beta *= sh.reflectance;
-                p = x + 1e-5 * (1.0 + max_abs_component(x)) * nf;
-                specular = false;
-                last_pdf = cosine_hemisphere_pdf(local.z);
-                last_p = x;
-            } else {  // smooth dielectric scene surface
-                bool refracted = false;
-                double eta_rel = 1;
-                const Vec3d w = sample_dielectric(d, n, double(sh.eta), rng.uniform<double>(), refracted, eta_rel);
-                if (refracted && opt.mode == TransportMode::radiance) beta /= F(eta_rel * eta_rel);
-                d = w;
-                p = x + (glm::dot(w, n) >= 0 ? 1e-5 : -1e-5) * (1.0 + max_abs_component(x)) * n;
-                specular = true;
-                last_pdf = 0;
-                last_p = x;
-            }
-            if (beta.is_black()) break;
+    const Ray<F> r{Vec3<F>(p), Vec3<F>(d)};
+    const SurfaceHit<F, S> sh = scene.intersect(r);
+    const double t_s = sh.hit() ? double(sh.t) : 1e30;
+    ++grain_rays;
+    const AggregateHit gh = agg.intersect(p, d, 0.0, t_s);
+    if (gh) {
+        // A grain interaction (a new one unless the same grain is hit again right away).
+        const bool same = ps.have_last_grain && ps.last_grain.tile == gh.grain.tile && ps.last_grain.sphere == gh.grain.sphere;
+        const Vec3d x = p + gh.t * d;
+        switch (EptSwitch(policy(std::as_const(ps), x, same))) {
+            case EptSwitch::switch_here:
+                x_switch = x;
+                ++ps.order;
+                return EptStep::switch_here;
+            case EptSwitch::high_from_here: ps.high = true; break;
+            case EptSwitch::stay: break;
         }
-        // Russian roulette.
-        if (events >= opt.rr_depth) {
-            const F q = std::min(F(1), beta.max_value());
-            if (q < F(1)) {
-                if (!(q > F(0)) || rng.uniform<F>() >= q) break;
-                beta /= q;
-            }
+        if (!same) ++ps.order;
+        ps.have_last_grain = true;
+        ps.last_grain = gh.grain;
+        const GrainMaterial& m = agg.exemplars()[gh.grain.exemplar].material();
+        const GrainSojourn s = grain_sojourn(
+            agg, gh.grain, x, d, gh.n, beta, rng, opt.mode, opt.max_events - ps.events,
+            [&](const Vec3d& xd, const Vec3d& n, S& thr) { nee_diffuse(xd, n, m.albedo.to_spectrum<S>(), thr); },
+            [](const Vec3d&, const Vec3d&) {});
+        ps.events += s.events;
+        if (!s.is_exited() || beta.is_black()) return EptStep::finished;
+        ps.last_p = s.p;
+        p = s.p;
+        d = s.d;
+        ps.specular = s.specular;
+        ps.last_pdf = s.pdf;
+    } else if (!sh.hit()) {
+        mis_emission(scene.environment(Vec3<F>(d)), SurfaceHit<F, S>{});
+        return EptStep::finished;
+    } else {
+        const Vec3d x = p + t_s * d;
+        const Vec3d n(sh.n);
+        if (sh.light >= 0) mis_emission(scene.emitted(sh, Vec3<F>(d)), sh);
+        const bool from_outside = glm::dot(d, n) < 0;
+        ps.have_last_grain = false;
+        if (sh.type == SurfaceType::absorber) return EptStep::finished;
+        if (sh.type == SurfaceType::passthrough) {
+            p = x + (from_outside ? -1e-5 : 1e-5) * n;
+            return EptStep::next;
+        }
+        ++ps.events;
+        if (sh.type == SurfaceType::diffuse) {
+            const Vec3d nf = from_outside ? n : -n;
+            nee_diffuse(x, nf, sh.reflectance, beta);
+            const Vec3d local = sample_cosine_hemisphere(rng.uniform2<double>());
+            d = glm::normalize(Frame<double>(nf).to_world(local));
+            beta *= sh.reflectance;
+            p = x + 1e-5 * (1.0 + max_abs_component(x)) * nf;
+            ps.specular = false;
+            ps.last_pdf = cosine_hemisphere_pdf(local.z);
+            ps.last_p = x;
+        } else {  // smooth dielectric scene surface
+            bool refracted = false;
+            double eta_rel = 1;
+            const Vec3d w = sample_dielectric(d, n, double(sh.eta), rng.uniform<double>(), refracted, eta_rel);
+            if (refracted && opt.mode == TransportMode::radiance) beta /= F(eta_rel * eta_rel);
+            d = w;
+            p = x + (glm::dot(w, n) >= 0 ? 1e-5 : -1e-5) * (1.0 + max_abs_component(x)) * n;
+            ps.specular = true;
+            ps.last_pdf = 0;
+            ps.last_p = x;
+        }
+        if (beta.is_black()) return EptStep::finished;
+    }
+    // Russian roulette.
+    if (ps.events >= opt.rr_depth) {
+        const F q = std::min(F(1), beta.max_value());
+        if (q < F(1)) {
+            if (!(q > F(0)) || rng.uniform<F>() >= q) return EptStep::finished;
+            beta /= q;
         }
     }
+    return EptStep::next;
+}
+
+/// Radiance arriving along camera ray (o, d) (scene frame = the aggregate's anchor frame) in a
+/// scene `scene` (LitScene: lights, ground, other surfaces; the aggregate is not one of its
+/// shapes) containing the aggregate `agg`. The camera is outside every medium and grain. Every
+/// grain material must be compatible with the scene's spectrum (GrainMaterial::compatible_with;
+/// render_ept checks it).
+template <LitScene Scene, BoundaryShape Shape>
+[[nodiscard]] EptRadiance<typename Scene::Spectrum> ept_radiance(const Scene& scene, const GranularAggregate<Shape>& agg,
+                                                                 const Ray<typename Scene::Float>& ray, Rng& rng,
+                                                                 const EptOptions& opt = {}) noexcept {
+    using S = typename Scene::Spectrum;
+    EptRadiance<S> out;
+    auto ps = EptPathState<S>::start(ray, opt.low_order_max);
+    Vec3d unused(0.0);
+    while (ept_step(scene, agg, ps, out.low, out.high, out.grain_rays, rng, opt, NeverSwitch{}, unused) == EptStep::next) {
+    }
     return out;
+}
+
+/// Throws grainlight::invalid_argument unless every grain material of `agg` can be rendered with
+/// `channels` spectrum channels (no channel is ever folded onto another).
+template <BoundaryShape Shape>
+inline void check_material_channels(const GranularAggregate<Shape>& agg, std::size_t channels, const char* where) {
+    for (const auto& e : agg.exemplars()) e.material().check_channels(channels, where);
 }
 
 /// The two images of an EPT render and its ray count.
@@ -542,6 +561,7 @@ template <LitScene Scene, BoundaryShape Shape, class Camera, class Progress = No
     check_argument(spp >= 1, "render_ept", "spp", spp, ">= 1");
     check_argument(threads >= 0, "render_ept", "threads", threads, ">= 0");
     check_argument(opt.low_order_max >= 0, "render_ept", "low_order_max", opt.low_order_max, ">= 0");
+    check_material_channels(agg, Scene::Spectrum::size, "render_ept");
     using F = typename Camera::Float;
     const int w = camera.width(), h = camera.height();
     EptImages img{Film(w, h), Film(w, h), 0};

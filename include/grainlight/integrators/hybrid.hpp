@@ -62,6 +62,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "grainlight/core/error.hpp"
@@ -178,17 +179,34 @@ struct HybridOptions {
 };
 
 /// Per-channel improved diffusion of the effective medium (index-matched boundary, Meng15 App.
-/// A: eta = 1) and the switch distance d_DA.
+/// A: eta = 1) and the switch distance d_DA. One entry per spectrum channel of the render, or one
+/// entry (or identical entries) for a grey medium; render_hybrid rejects any other count.
 struct HybridDiffusion {
-    std::array<ImprovedDiffusion<double>, 3> channel;
+    std::vector<ImprovedDiffusion<double>> channel;
     double d_DA = 0;  ///< max over channels of min(1 / sigma_t', 0.5 / sigma_tr)
+
+    /// Every channel has the same parameters.
+    [[nodiscard]] bool is_grey() const noexcept {
+        for (const auto& d : channel)
+            if (d.sigma_s_prime() != channel.front().sigma_s_prime() || d.sigma_a() != channel.front().sigma_a()) return false;
+        return true;
+    }
+    /// Usable by a render with `n` spectrum channels.
+    [[nodiscard]] bool compatible_with(std::size_t n) const noexcept {
+        return !channel.empty() && (channel.size() == 1 || channel.size() == n || is_grey());
+    }
+    /// The diffusion of spectrum channel c (requires compatible_with(number of channels)).
+    [[nodiscard]] const ImprovedDiffusion<double>& at(std::size_t c) const noexcept {
+        return channel[c < channel.size() ? c : 0];
+    }
 };
 
 /// Diffusion parameters from the effective RTE parameters (Sec. 4.2.3: sigma_s' = (1 - g)
-/// alpha_s sigma_t, sigma_a = (1 - alpha_s) sigma_t), eta = 1.
+/// alpha_s sigma_t, sigma_a = (1 - alpha_s) sigma_t), eta = 1, one entry per channel of `p`.
 [[nodiscard]] inline HybridDiffusion make_hybrid_diffusion(const EffectiveRteParams& p) {
-    auto make = [&](int c) { return ImprovedDiffusion<double>(p.sigma_s_reduced[c], p.sigma_a[c], 1.0); };
-    HybridDiffusion h{{make(0), make(1), make(2)}, 0.0};
+    HybridDiffusion h;
+    for (std::size_t c = 0; c < RGBd::size; ++c)
+        h.channel.emplace_back(p.sigma_s_reduced[c], p.sigma_a[c], 1.0);
     for (const auto& d : h.channel) h.d_DA = std::max(h.d_DA, d.switch_distance());
     return h;
 }
@@ -308,7 +326,7 @@ template <LitScene Scene, class Distance>
     }
     weight = S(F(0));
     for (std::size_t ch = 0; ch < S::size; ++ch) {
-        const auto& d = ctx.diffusion->channel[std::min<std::size_t>(ch, 2)];
+        const auto& d = ctx.diffusion->at(ch);
         double Rp;
         if (std::isfinite(thickness)) {
             const MultipoleSlab<double> slab(d.sigma_s_prime(), d.sigma_a(), 1.0, thickness, DiffusionModel::improved);
@@ -463,148 +481,6 @@ struct HybridBundleResult {
     }
 };
 
-namespace detail {
-
-/// State of one EPT path of a bundle (the variables of ept_radiance's loop).
-template <class S>
-struct HybridEptPath {
-    Vec3d p{0.0}, d{0.0, 0.0, 1.0};
-    S beta{1.0f};
-    bool specular = true;
-    double last_pdf = 0;
-    Vec3d last_p{0.0};
-    int order = 0, events = 0;
-    bool have_last_grain = false;
-    AggregateGrain last_grain{};
-    bool alive = true;
-    bool high = false;  ///< contributions go to the high-order part (after the switch)
-};
-
-/// One iteration of ept_radiance's loop for path `ps` (identical random-number consumption).
-/// Returns 0: continue, 1: path finished, 2: switch at the grain hit `x_switch` (not yet
-/// consumed: the caller continues with VPT from there).
-template <LitScene Scene, BoundaryShape Shape>
-int hybrid_ept_step(const Scene& scene, const GranularAggregate<Shape>& agg, HybridEptPath<typename Scene::Spectrum>& ps,
-                    HybridPathRadiance<typename Scene::Spectrum>& out, Rng& rng, const HybridOptions& hopt, bool armed,
-                    std::uint64_t& grain_rays, Vec3d& x_switch) noexcept {
-    using F = typename Scene::Float;
-    using S = typename Scene::Spectrum;
-    const EptOptions& opt = hopt.ept;
-    if (ps.events >= opt.max_events) return 1;
-    const double R = agg.grain_radius();
-    Vec3d& p = ps.p;
-    Vec3d& d = ps.d;
-    S& beta = ps.beta;
-
-    auto add = [&](const S& L) {
-        if (ps.high)
-            out.high += L;
-        else
-            out.low += L;
-    };
-    auto mis_emission = [&](const S& Le, const SurfaceHit<F, S>& hit) {
-        if (Le.is_black()) return;
-        double w = 1;
-        if (opt.nee && !ps.specular) {
-            const double pl = double(scene.light_pdf(Vec3<F>(ps.last_p), Vec3<F>(d), hit));
-            w = power_heuristic(ps.last_pdf, pl);
-        }
-        add(beta * Le * F(w));
-    };
-    auto nee_diffuse = [&](const Vec3d& x, const Vec3d& nf, const S& rho, const S& thr) {
-        if (opt.nee) add(detail::ept_nee_lambertian(scene, agg, rng, R, x, nf, rho, thr, grain_rays));
-    };
-
-    const Ray<F> r{Vec3<F>(p), Vec3<F>(d)};
-    const SurfaceHit<F, S> sh = scene.intersect(r);
-    const double t_s = sh.hit() ? double(sh.t) : 1e30;
-    ++grain_rays;
-    const AggregateHit gh = agg.intersect(p, d, 0.0, t_s);
-    if (gh) {
-        const bool same = ps.have_last_grain && ps.last_grain.tile == gh.grain.tile && ps.last_grain.sphere == gh.grain.sphere;
-        // Eq. 5 switch at the next grain hit of an armed bundle.
-        if (armed && !ps.high && !same && ps.order >= hopt.min_ept_interactions) {
-            const Vec3d x = p + gh.t * d;
-            if (agg.boundary().shape().inside(x)) {
-                out.switched = true;
-                out.switch_order = ps.order;
-                if (hopt.mode != HybridMode::ept) {
-                    x_switch = x;
-                    ++ps.order;
-                    return 2;
-                }
-                ps.high = true;  // mode ept: only the split changes
-            }
-        }
-        if (!same) ++ps.order;
-        ps.have_last_grain = true;
-        ps.last_grain = gh.grain;
-        const GrainSojourn s = grain_sojourn(
-            agg, gh.grain, p + gh.t * d, d, gh.n, beta, rng, opt.mode, opt.max_events - ps.events,
-            [&](const Vec3d& x, const Vec3d& n, S& thr) {
-                const GrainMaterial& m = agg.exemplars()[gh.grain.exemplar].material();
-                S rho;
-                for (std::size_t c = 0; c < S::size; ++c) rho[c] = F(m.albedo[std::min<std::size_t>(c, 2)]);
-                nee_diffuse(x, n, rho, thr);
-            },
-            [](const Vec3d&, const Vec3d&) {});
-        ps.events += s.events;
-        if (s.kind == GrainSojourn::absorbed || beta.is_black()) return 1;
-        ps.last_p = s.p;
-        p = s.p;
-        d = s.d;
-        ps.specular = s.specular;
-        ps.last_pdf = s.pdf;
-    } else if (!sh.hit()) {
-        mis_emission(scene.environment(Vec3<F>(d)), SurfaceHit<F, S>{});
-        return 1;
-    } else {
-        const Vec3d x = p + t_s * d;
-        const Vec3d n(sh.n);
-        if (sh.light >= 0) mis_emission(scene.emitted(sh, Vec3<F>(d)), sh);
-        const bool from_outside = glm::dot(d, n) < 0;
-        ps.have_last_grain = false;
-        if (sh.type == SurfaceType::absorber) return 1;
-        if (sh.type == SurfaceType::passthrough) {
-            p = x + (from_outside ? -1e-5 : 1e-5) * n;
-            return 0;
-        }
-        ++ps.events;
-        if (sh.type == SurfaceType::diffuse) {
-            const Vec3d nf = from_outside ? n : -n;
-            nee_diffuse(x, nf, sh.reflectance, beta);
-            const Vec3d local = sample_cosine_hemisphere(rng.uniform2<double>());
-            d = glm::normalize(Frame<double>(nf).to_world(local));
-            beta *= sh.reflectance;
-            p = x + 1e-5 * (1.0 + max_abs_component(x)) * nf;
-            ps.specular = false;
-            ps.last_pdf = cosine_hemisphere_pdf(local.z);
-            ps.last_p = x;
-        } else {
-            bool refracted = false;
-            double eta_rel = 1;
-            const Vec3d w = sample_dielectric(d, n, double(sh.eta), rng.uniform<double>(), refracted, eta_rel);
-            if (refracted && opt.mode == TransportMode::radiance) beta /= F(eta_rel * eta_rel);
-            d = w;
-            p = x + (glm::dot(w, n) >= 0 ? 1e-5 : -1e-5) * (1.0 + max_abs_component(x)) * n;
-            ps.specular = true;
-            ps.last_pdf = 0;
-            ps.last_p = x;
-        }
-        if (beta.is_black()) return 1;
-    }
-    if (ps.events >= opt.rr_depth) {
-        const F q = std::min(F(1), beta.max_value());
-        if (q < F(1)) {
-            if (!(q > F(0)) || rng.uniform<F>() >= q) return 1;
-            beta /= q;
-        }
-    }
-    return 0;
-}
-
-}  // namespace detail
-
 /// Eq. 5's coherence measure: sigma_k = sqrt(1/N_k sum |x_i - mean|^2) of the given points.
 [[nodiscard]] inline double bundle_spread(const Vec3d* x, int n) noexcept {
     if (n <= 0) return 0.0;
@@ -632,12 +508,12 @@ template <LitScene Scene, BoundaryShape Shape, class Distance>
     n = std::clamp(n, 1, 64);
     res.n = n;
     res.counters.paths = std::uint64_t(n);
-    std::array<detail::HybridEptPath<S>, 64> ps;
+    // The EPT prefix of every path is ept_step itself (NeverSwitch until the bundle is armed).
+    std::array<EptPathState<S>, 64> ps;
+    std::array<bool, 64> path_alive{};
     for (int i = 0; i < n; ++i) {
-        auto& q = ps[std::size_t(i)];
-        q.p = Vec3d(rays[i].o);
-        q.d = glm::normalize(Vec3d(rays[i].d));
-        q.last_p = q.p;
+        ps[std::size_t(i)] = EptPathState<S>::start(rays[i], std::numeric_limits<int>::max());
+        path_alive[std::size_t(i)] = true;
     }
     const double tau = opt.tau * agg.grain_radius();
     bool armed = false;
@@ -648,17 +524,27 @@ template <LitScene Scene, BoundaryShape Shape, class Distance>
     while (alive > 0) {
         for (int i = 0; i < n; ++i) {
             auto& q = ps[std::size_t(i)];
-            if (!q.alive) continue;
+            if (!path_alive[std::size_t(i)]) continue;
+            auto& path = res.path[std::size_t(i)];
             Vec3d x_switch(0.0);
+            // Eq. 5 switch at the next grain hit of an armed bundle, inside the boundary.
+            auto policy = [&](const EptPathState<S>& st, const Vec3d& x, bool same) {
+                if (!armed || st.high || same || st.order < opt.min_ept_interactions || !agg.boundary().shape().inside(x))
+                    return EptSwitch::stay;
+                path.switched = true;
+                path.switch_order = st.order;
+                // Mode ept: only the split changes.
+                return opt.mode != HybridMode::ept ? EptSwitch::switch_here : EptSwitch::high_from_here;
+            };
             // Mode ept: the steps after the would-be switch are the high-order part's cost.
             const bool time_step = opt.measure_time && opt.mode == HybridMode::ept && q.high;
             const auto ts0 = time_step ? Clock::now() : Clock::time_point{};
-            const int r = detail::hybrid_ept_step(scene_ept, agg, q, res.path[std::size_t(i)], rngs[i], opt, armed,
-                                                  res.counters.grain_rays, x_switch);
+            const EptStep r = ept_step(scene_ept, agg, q, path.low, path.high, res.counters.grain_rays, rngs[i], opt.ept,
+                                       policy, x_switch);
             if (time_step) t_high += std::chrono::duration<double>(Clock::now() - ts0).count();
-            if (r == 0) continue;
-            q.alive = false;
-            if (r == 2) {
+            if (r == EptStep::next) continue;
+            path_alive[std::size_t(i)] = false;
+            if (r == EptStep::switch_here) {
                 // P_a roulette, then the VPT (+ DA) continuation.
                 Rng& rng = rngs[i];
                 if (opt.acceptance < 1.0 && rng.uniform<double>() >= opt.acceptance) {
@@ -677,7 +563,7 @@ template <LitScene Scene, BoundaryShape Shape, class Distance>
         // Eq. 5 on the vertices of the paths still in EPT.
         int nk = 0;
         for (int i = 0; i < n; ++i)
-            if (ps[std::size_t(i)].alive) xs[std::size_t(nk++)] = ps[std::size_t(i)].p;
+            if (path_alive[std::size_t(i)]) xs[std::size_t(nk++)] = ps[std::size_t(i)].p;
         alive = nk;
         if (!armed && nk > 0) {
             if (nk == 1 && opt.switch_single && n > 1)
@@ -757,6 +643,10 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
     check_argument(ctx.medium >= 0, "render_hybrid", "ctx.medium", ctx.medium, ">= 0");
     using F = typename Camera::Float;
     using S = typename Scene::Spectrum;
+    check_material_channels(agg, S::size, "render_hybrid");
+    if (opt.mode == HybridMode::ept_vpt_da)
+        check_argument(ctx.diffusion->compatible_with(S::size), "render_hybrid", "ctx.diffusion channels",
+                       ctx.diffusion->channel.size(), "1 (grey) or " + std::to_string(S::size) + " (the spectrum's channels)");
     opt.measure_time = true;
     const int W = camera.width(), H = camera.height();
     const int w = (W + stride - 1) / stride, h = (H + stride - 1) / stride;

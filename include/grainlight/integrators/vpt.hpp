@@ -21,6 +21,7 @@
 
 #include "grainlight/core/ray.hpp"
 #include "grainlight/core/rng.hpp"
+#include "grainlight/core/warp.hpp"
 #include "grainlight/integrators/walk.hpp"
 #include "grainlight/media/concepts.hpp"
 #include "grainlight/scene/concepts.hpp"
@@ -34,12 +35,7 @@ struct VptOptions {
     bool nee = true;      ///< next-event estimation (with MIS); false: pure path tracing
 };
 
-/// Power heuristic weight (beta = 2) of a strategy with pdf a against one with pdf b.
-template <std::floating_point F>
-[[nodiscard]] inline F power_heuristic(F a, F b) noexcept {
-    const F a2 = a * a, b2 = b * b;
-    return a2 + b2 > F(0) ? a2 / (a2 + b2) : F(0);
-}
+// power_heuristic (MIS weight) is defined in core/warp.hpp.
 
 /// Transmittance of a shadow segment from p along unit w over distance `dist` (inf: to infinity;
 /// the segment stops a small scale-aware margin short of dist so the target emitter never blocks)

@@ -53,8 +53,7 @@
 
 namespace grainlight {
 
-/// What the path carries: radiance mode for camera paths, importance (power) mode for light paths.
-enum class TransportMode : std::uint8_t { radiance, importance };
+// TransportMode (radiance / importance) is defined in optics/fresnel.hpp.
 
 /// How a walk ended.
 enum class WalkEnd : std::uint8_t {
@@ -125,25 +124,15 @@ template <std::floating_point F, class S>
 
 }  // namespace detail
 
-/// Resolve a smooth dielectric interface for a path travelling along `d` that hits a surface with
-/// unit outward normal `n` and relative index `eta` = n_inside / n_outside. Chooses Fresnel
-/// reflection with probability F (unpolarized, optics/fresnel.hpp) and refraction otherwise
-/// (always reflection under total internal reflection). Returns the new direction; `refracted`
-/// tells which, `eta_rel` = n_t / n_i along the path (1 on reflection).
+/// Out-parameter form of sample_dielectric (optics/fresnel.hpp), kept for one release: returns the
+/// new direction, `refracted` tells which, `eta_rel` = n_t / n_i along the path (1 on reflection).
 template <std::floating_point F>
 [[nodiscard]] inline Vec3<F> sample_dielectric(const Vec3<F>& d, const Vec3<F>& n, F eta, F u, bool& refracted,
                                                F& eta_rel) noexcept {
-    const Vec3<F> wi = -d;  // toward where the path came from
-    const F cos_i = glm::dot(wi, n);
-    const F fr = fresnel_dielectric(cos_i, eta);
-    Vec3<F> wt(F(0));
-    if (u >= fr && refract(wi, n, eta, wt, &eta_rel)) {
-        refracted = true;
-        return glm::normalize(wt);
-    }
-    refracted = false;
-    eta_rel = F(1);
-    return glm::normalize(d - F(2) * glm::dot(d, n) * n);
+    const DielectricSample<F> s = sample_dielectric(d, n, eta, u);
+    refracted = s.refracted;
+    eta_rel = s.eta_rel;
+    return s.w;
 }
 
 /// Run one walk from `state` through `scene` until it escapes, is absorbed, is killed or a

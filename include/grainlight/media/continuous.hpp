@@ -21,7 +21,7 @@
 
 namespace grainlight {
 
-template <class Phase, class S = typename Phase::Spectrum>
+template <PhaseFunction Phase, SpectrumType S = typename Phase::Spectrum>
 class ContinuousMedium {
 public:
     using Float = typename Phase::Float;

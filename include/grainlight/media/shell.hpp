@@ -56,37 +56,14 @@
 #include "grainlight/core/spectrum.hpp"
 #include "grainlight/core/warp.hpp"
 #include "grainlight/media/concepts.hpp"
-#include "grainlight/precompute/serialization.hpp"
+#include "grainlight/core/serialization.hpp"
 
 namespace grainlight {
 
 namespace detail {
 
-/// Inverse of sample_uniform_disk_concentric (Shirley & Chiu 1997): a point of the closed unit
-/// disk to [0,1]^2. Round trip exact up to rounding.
-template <std::floating_point F>
-[[nodiscard]] inline Vec2<F> inverse_disk_concentric(Vec2<F> p) noexcept {
-    const F r = std::sqrt(p.x * p.x + p.y * p.y);
-    if (!(r > F(0))) return Vec2<F>(F(0.5), F(0.5));
-    constexpr F q = pi_v<F> / F(4);
-    F phi = std::atan2(p.y, p.x);  // (-pi, pi]
-    if (phi < -q) phi += F(2) * pi_v<F>;  // [-pi/4, 7pi/4)
-    F ox, oy;
-    if (phi < q) {
-        ox = r;
-        oy = ox * phi / q;
-    } else if (phi < F(3) * q) {
-        oy = r;
-        ox = oy * (F(2) * q - phi) / q;
-    } else if (phi < F(5) * q) {
-        ox = -r;
-        oy = ox * (phi - pi_v<F>) / q;
-    } else {
-        oy = -r;
-        ox = oy * (F(2) * q - (phi - pi_v<F>)) / q;
-    }
-    return Vec2<F>(std::clamp((ox + F(1)) / F(2), F(0), F(1)), std::clamp((oy + F(1)) / F(2), F(0), F(1)));
-}
+// inverse_disk_concentric moved to core/warp.hpp (next to sample_uniform_disk_concentric).
+using ::grainlight::inverse_disk_concentric;
 
 /// Tangent e1 of the Moon07 exit frame at a shell point with unit normal n, for the start
 /// direction omega (unit): normalize(omega - dot(n, omega) n), or any unit tangent if n ~ +-omega.
@@ -316,7 +293,7 @@ struct ShellStep {
 /// Fig. 5 leaves along y - x. `step()` implements the paper's rule when given an inside test.
 ///
 /// Thread-safe const queries; no allocation or exceptions per sample.
-template <std::floating_point F = double, class S = Spectrum<1, F>, class Boundary = InfiniteBoundary<F>>
+template <std::floating_point F = double, SpectrumType S = Spectrum<1, F>, class Boundary = InfiniteBoundary<F>>
 class ShellMedium {
 public:
     using Float = F;

@@ -39,7 +39,7 @@
 #include "grainlight/media/concepts.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/phase/tabulated.hpp"
-#include "grainlight/precompute/scatterometer.hpp"
+#include "grainlight/media/grain_stats.hpp"
 
 namespace grainlight {
 

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "grainlight/core/math.hpp"
 #include "grainlight/core/vector.hpp"
@@ -85,6 +86,40 @@ template <std::floating_point F>
         acc += double(fresnel_dielectric(F(std::sqrt(mu2)), F(1) / eta));
     }
     return F(acc / n);
+}
+
+/// What a path carries: radiance for camera paths (a refraction scales it by 1/eta_rel^2),
+/// importance (power) for light paths (no scaling).
+enum class TransportMode : std::uint8_t { radiance, importance };
+
+/// Result of sample_dielectric.
+template <std::floating_point F>
+struct DielectricSample {
+    Vec3<F> w{F(0)};        ///< new propagation direction (unit)
+    bool refracted = false; ///< refraction (true) or reflection (false)
+    F eta_rel = F(1);       ///< n_t / n_i along the path (1 on reflection)
+};
+
+/// Resolve a smooth dielectric interface for a path travelling along `d` that hits a surface with
+/// unit outward normal `n` and relative index `eta` = n_inside / n_outside, with one uniform `u`:
+/// Fresnel reflection with probability F (unpolarized, fresnel_dielectric) and refraction
+/// otherwise (always reflection under total internal reflection).
+template <std::floating_point F>
+[[nodiscard]] inline DielectricSample<F> sample_dielectric(const Vec3<F>& d, const Vec3<F>& n, F eta, F u) noexcept {
+    const Vec3<F> wi = -d;  // toward where the path came from
+    const F cos_i = glm::dot(wi, n);
+    const F fr = fresnel_dielectric(cos_i, eta);
+    DielectricSample<F> s;
+    Vec3<F> wt(F(0));
+    if (u >= fr && refract(wi, n, eta, wt, &s.eta_rel)) {
+        s.refracted = true;
+        s.w = glm::normalize(wt);
+        return s;
+    }
+    s.refracted = false;
+    s.eta_rel = F(1);
+    s.w = glm::normalize(d - F(2) * glm::dot(d, n) * n);
+    return s;
 }
 
 }  // namespace grainlight

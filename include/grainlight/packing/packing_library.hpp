@@ -15,7 +15,7 @@
 #include "grainlight/core/rng.hpp"
 #include "grainlight/packing/md_packer.hpp"
 #include "grainlight/packing/periodic_tile.hpp"
-#include "grainlight/precompute/serialization.hpp"
+#include "grainlight/core/serialization.hpp"
 
 namespace grainlight {
 

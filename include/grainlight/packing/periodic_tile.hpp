@@ -29,7 +29,7 @@
 #include "grainlight/core/math.hpp"
 #include "grainlight/core/ray.hpp"
 #include "grainlight/core/vector.hpp"
-#include "grainlight/precompute/serialization.hpp"
+#include "grainlight/core/serialization.hpp"
 
 namespace grainlight {
 

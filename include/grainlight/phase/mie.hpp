@@ -12,8 +12,11 @@
 /// averaged) above; ensemble tables (optics/bulk.hpp) are smooth and need no more.
 ///
 /// Direction convention: phase/concepts.hpp (propagation directions, cos theta = +1 forward).
-/// Sources of the intensities: `from_mie` (exact Lorenz-Mie, lorenz_mie.hpp, no Boost), or any
-/// tabulated |S1|^2 + |S2|^2 (GOA, particle.hpp; ensembles, bulk.hpp) via `from_intensities`.
+/// Sources of the intensities: any tabulated |S1|^2 + |S2|^2 via `from_intensities` (GOA,
+/// particle.hpp; ensembles, bulk.hpp), or exact Lorenz-Mie through `optics/mie_phase.hpp`
+/// (`make_mie_phase`). This header includes nothing from optics/ (layer order: phase < optics);
+/// the deprecated `MiePhase::from_mie` is a template that needs optics/lorenz_mie.hpp included
+/// where it is called.
 #pragma once
 
 #include <algorithm>
@@ -25,10 +28,11 @@
 
 #include "grainlight/core/error.hpp"
 #include "grainlight/core/math.hpp"
-#include "grainlight/optics/lorenz_mie.hpp"
 #include "grainlight/phase/tabulated.hpp"
 
 namespace grainlight {
+
+class LorenzMie;  // optics/lorenz_mie.hpp (only MiePhase::from_mie uses it)
 
 /// Scattering angles theta in [0, pi] (ascending, theta_0 = 0, last = pi): n_peak nodes spaced
 /// geometrically from 0.05/x_max to 0.2 rad (the diffraction peak of any x <= x_max gets >= 30
@@ -105,18 +109,30 @@ public:
         return p;
     }
 
-    /// Exact Lorenz-Mie phase function of one sphere (m = n + i k, k >= 0; size parameter x), every
-    /// channel equal, on `theta` (default forward_peaked_theta_grid(x)).
-    [[nodiscard]] static MiePhase from_mie(std::complex<double> m, double x, std::span<const double> theta = {}) {
-        const LorenzMie mie(m, x);
+    /// Phase function from a callable `amplitudes(mu) -> {S1, S2}` (complex scattering amplitudes
+    /// at cos(theta) = mu, e.g. LorenzMie::amplitudes), tabulated on `theta` (default
+    /// forward_peaked_theta_grid(x)); every channel equal. The end nodes use mu = +-1 exactly.
+    template <class Amplitudes>
+    [[nodiscard]] static MiePhase from_amplitudes(Amplitudes&& amplitudes, double x, std::span<const double> theta = {}) {
         std::vector<double> grid = theta.empty() ? forward_peaked_theta_grid(x) : std::vector<double>(theta.begin(), theta.end());
         std::vector<S> v(grid.size());
         for (std::size_t i = 0; i < grid.size(); ++i) {
             const double mu = i == 0 ? 1.0 : (i + 1 == grid.size() ? -1.0 : std::cos(grid[i]));
-            const auto s = mie.amplitudes(mu);
+            const auto s = amplitudes(mu);
             v[i] = S(F(std::norm(s.S1) + std::norm(s.S2)));
         }
         return from_intensities(grid, v);
+    }
+
+    /// Exact Lorenz-Mie phase function of one sphere (m = n + i k, k >= 0; size parameter x), every
+    /// channel equal, on `theta` (default forward_peaked_theta_grid(x)).
+    /// Deprecated (kept for one release): use make_mie_phase (optics/mie_phase.hpp). The solver is a
+    /// template parameter so that this header does not include the optics layer; include
+    /// optics/lorenz_mie.hpp (or optics/mie_phase.hpp) where you call it.
+    template <class Solver = LorenzMie>
+    [[nodiscard]] static MiePhase from_mie(std::complex<double> m, double x, std::span<const double> theta = {}) {
+        const Solver mie(m, x);
+        return from_amplitudes([&](double mu) { return mie.amplitudes(mu); }, x, theta);
     }
 
     [[nodiscard]] PhaseEval<F, S> eval(const Vec3<F>& w_in, const Vec3<F>& w_out) const noexcept {

@@ -27,7 +27,7 @@
 /// Closed-form check (tests): integrating L_o over the grid and all directions gives the scattered
 /// power of orders >= 2, alpha^2 / (1 - alpha) per unit source power, minus what leaves the grid.
 ///
-/// File: the shared container (precompute/serialization.hpp), kind "MSTB", version 1. Payload:
+/// File: the shared container (core/serialization.hpp), kind "MSTB", version 1. Payload:
 /// u32 channels, n_rho, n_z, n_theta, n_phi; f64 rho_max, z_min, z_max, mean_cosine; f64
 /// albedo[channels]; u64 photons; u64 count; f32 values[count] (count = channels n_z n_rho
 /// n_theta n_phi, index ((c n_z + iz) n_rho + ir) n_theta n_phi + it n_phi + ip).
@@ -48,7 +48,7 @@
 #include "grainlight/core/spectrum.hpp"
 #include "grainlight/integrators/walk.hpp"
 #include "grainlight/media/continuous.hpp"
-#include "grainlight/precompute/serialization.hpp"
+#include "grainlight/core/serialization.hpp"
 #include "grainlight/scene/concepts.hpp"
 
 namespace grainlight {

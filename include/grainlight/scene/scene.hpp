@@ -57,7 +57,7 @@ struct Material {
 
 /// The scene. `MediumT` is the one medium type of the scene (a closed set of several kinds can
 /// be a std::variant wrapper meeting the Medium concept).
-template <class MediumT>
+template <Medium MediumT>
 class Scene {
 public:
     using Medium = MediumT;

@@ -36,6 +36,7 @@
 #include "grainlight/core/rng.hpp"
 #include "grainlight/core/vector.hpp"
 #include "grainlight/geometry/bvh.hpp"
+#include "grainlight/geometry/grain.hpp"
 #include "grainlight/geometry/grains.hpp"
 #include "grainlight/geometry/sphere.hpp"
 #include "grainlight/geometry/transform.hpp"
@@ -45,76 +46,9 @@
 
 namespace grainlight {
 
-/// An example grain in its unit bounding sphere (centred at the origin, radius 1): an analytic
-/// sphere of radius r <= 1 or a watertight mesh with every vertex within the unit sphere, and
-/// its material. A grain larger than its bounding sphere is an error (invalid_argument).
-class GrainExemplar {
-public:
-    [[nodiscard]] static GrainExemplar sphere(double radius, const GrainMaterial& material) {
-        check_grain_radius("GrainExemplar::sphere", "radius", radius);
-        material.validate();
-        GrainExemplar g;
-        g.radius_ = radius;
-        g.material_ = material;
-        return g;
-    }
-    [[nodiscard]] static GrainExemplar mesh(const TriangleMesh<float>& m, const GrainMaterial& material) {
-        const double r = check_grain_mesh("GrainExemplar::mesh", m);
-        material.validate();
-        GrainExemplar g;
-        g.bvh_ = std::make_shared<const Bvh<float>>(m);
-        g.radius_ = r;
-        g.material_ = material;
-        g.triangles_ = m.triangle_count();
-        return g;
-    }
-    /// Procedural grain (geometry/grains.hpp) of bounding radius in (0, 1]; the sphere shape is
-    /// the analytic sphere.
-    [[nodiscard]] static GrainExemplar procedural(GrainShape shape, double radius, const GrainMaterial& material,
-                                                  std::uint64_t seed = 1, int level = 4) {
-        check_grain_radius("GrainExemplar::procedural", "radius", radius);
-        if (shape == GrainShape::sphere) return sphere(radius, material);
-        return mesh(make_grain_mesh<float>(shape, float(radius), seed, level), material);
-    }
-    /// From a preset of geometry/grains.hpp.
-    [[nodiscard]] static GrainExemplar from_preset(const GrainPreset& p, int level = 4) {
-        return procedural(p.shape, p.radius, p.material, p.seed, level);
-    }
-
-    [[nodiscard]] const GrainMaterial& material() const noexcept { return material_; }
-    [[nodiscard]] bool is_analytic_sphere() const noexcept { return !bvh_; }
-    [[nodiscard]] double radius() const noexcept { return radius_; }
-    [[nodiscard]] std::size_t triangle_count() const noexcept { return triangles_; }
-    /// Bytes of the exemplar's geometry (BVH nodes + triangles; 0 for the analytic sphere).
-    [[nodiscard]] std::size_t memory_bytes() const noexcept {
-        if (!bvh_) return 0;
-        return bvh_->nodes().size() * sizeof(BvhNode<float>) +
-               triangles_ * (sizeof(std::array<Vec3f, 3>) + sizeof(Vec3f) + sizeof(std::uint32_t));
-    }
-    /// Closest hit along o + t d (unit frame, d unit), t in (t_min, t_max): t and the outward unit
-    /// normal. Returns false on a miss.
-    [[nodiscard]] bool intersect(const Vec3d& o, const Vec3d& d, double t_min, double t_max, double& t,
-                                 Vec3d& n) const noexcept {
-        if (!bvh_) {
-            if (!intersect_sphere_first(o, d, Vec3d(0.0), radius_, t_min, t_max, t)) return false;
-            n = glm::normalize(o + t * d);
-            return true;
-        }
-        const Vec3d o2 = o + t_min * d;  // float BVH: start at t_min to keep the offset small
-        const auto h = bvh_->intersect(Vec3f(o2), Vec3f(d), 0.0f, float(std::min(t_max - t_min, 1e30)));
-        if (!h.valid()) return false;
-        t = t_min + double(h.t);
-        n = Vec3d(h.n_geom);
-        return true;
-    }
-
-private:
-    GrainExemplar() = default;
-    std::shared_ptr<const Bvh<float>> bvh_;
-    double radius_ = 1.0;
-    std::size_t triangles_ = 0;
-    GrainMaterial material_{};
-};
+/// The example grains of an aggregate are grainlight::Grain (geometry/grain.hpp).
+/// Deprecated alias, kept for one release.
+using GrainExemplar = Grain;
 
 /// A grain of the aggregate: the bounding sphere (id in the tile, absolute tile index) and its
 /// instancing (exemplar index and rotation: x_world = center + R * rotation.to_world(x_unit)).

@@ -1,0 +1,2 @@
+#pragma once
+#include "grainlight/phase/b.hpp"

@@ -1,0 +1,2 @@
+#pragma once
+#include "grainlight/core/a.hpp"
