@@ -26,10 +26,10 @@
 #include <limits>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
-#include "common/progress.hpp"
+#include "common/harness.hpp"
 #include "grainlight/diffusion.hpp"
+#include "grainlight/integrators/walk.hpp"
+#include "grainlight/phase/henyey_greenstein.hpp"
 #include "grainlight/scene/slab.hpp"
 
 namespace {
@@ -94,18 +94,14 @@ double exact_halfspace(double a) { return grainlight::IsotropicHFunction(a, 200)
 }  // namespace
 
 int main(int argc, char** argv) {
-    return gl_examples::run_main("diffusion_profiles", [&]() -> int {
-        gl_examples::Cli cli(argc, argv, "diffusion_profiles",
-                             "dipole / improved / multipole R(r) vs a Monte Carlo radial profile (semi-infinite medium)");
-        cli.option("paths", "photon paths per case (>= 1000)", "200000 quick, 2000000 full").common_options("out");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const std::uint64_t paths = cli.integer("paths", full ? 2000000 : 200000);
+    return gl_examples::run(argc, argv, "diffusion_profiles",
+                            "dipole / improved / multipole R(r) vs a Monte Carlo radial profile (semi-infinite medium)",
+                            [&](gl_examples::Example& ex) -> int {
+        const auto paths = ex.opt<std::uint64_t>("paths", 200000, 2000000, "photon paths per case (>= 1000)");
+        ex.ready();
         if (paths < 1000) throw gl_examples::cli_error("--paths = " + std::to_string(paths) + " must be >= 1000");
-        const std::uint64_t seed = cli.seed();
-        const int threads = cli.threads();
-        (void)threads;
-        const auto out = cli.out_dir();
+        const std::uint64_t seed = ex.seed();
+        const auto& out = ex.out();
 
         struct Case {
             double a, g, B;  // albedo, HG g, optical depth sigma_t d (inf = half-space)
@@ -129,21 +125,13 @@ int main(int argc, char** argv) {
             const MultipoleSlab<double> mpi(ss, sa, 1.0, d, DiffusionModel::improved);
 
             // Fixed-size blocks reduced in block order: identical numbers for any thread count.
-            const std::uint64_t block = 4096, n_blocks = (paths + block - 1) / block;
-            std::vector<RadialTally> tallies(n_blocks);
             char label[64];
             std::snprintf(label, sizeof label, "a=%.2f g=%.1f B=%g", c.a, c.g, c.B);
-            gl_examples::ProgressBar bar(label, n_blocks);
             const auto t0 = std::chrono::steady_clock::now();
-#pragma omp parallel for schedule(dynamic, 1)
-            for (long long b = 0; b < (long long)n_blocks; ++b) {
-                const std::uint64_t first = std::uint64_t(b) * block;
-                tallies[std::size_t(b)] = run_block(scene, st, first, std::min(block, paths - first), seed);
-                bar.advance();
-            }
-            bar.done();
-            RadialTally t;
-            for (const auto& x : tallies) t.merge(x);
+            const RadialTally t = ex.parallel<RadialTally>(
+                label, paths, 4096,
+                [&](std::uint64_t, std::uint64_t first, std::uint64_t end) { return run_block(scene, st, first, end - first, seed); },
+                [](RadialTally& acc, const RadialTally& x) { acc.merge(x); });
             const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
             for (int face = 0; face < (slab ? 2 : 1); ++face) {
@@ -165,14 +153,14 @@ int main(int argc, char** argv) {
             const double T_ball = slab ? std::exp(-c.B) : 0.0;
             const double exact = (c.g == 0.0 && !slab) ? exact_halfspace(c.a) : std::nan("");
             const auto tc = mpc.totals(), ti = mpi.totals();
-            char ex[32] = "-";
-            if (std::isfinite(exact)) std::snprintf(ex, sizeof ex, "%.5f", exact);
+            char exact_str[32] = "-";
+            if (std::isfinite(exact)) std::snprintf(exact_str, sizeof exact_str, "%.5f", exact);
             std::printf("%-6.2f %-4.1f %-4g R  | %.5f +- %.5f | %.5f  %.5f  %.5f  %.5f  | %-8s | %.1f\n", c.a, c.g, c.B,
-                        R_mc, R_se, dip.total_reflectance(), imp.total_reflectance(), tc.R, ti.R, ex, seconds);
+                        R_mc, R_se, dip.total_reflectance(), imp.total_reflectance(), tc.R, ti.R, exact_str, seconds);
             if (slab)
                 std::printf("%-6s %-4s %-4s T  | %.5f +- %.5f | %-8s %-8s %.5f  %.5f  | %-8s |\n", "", "", "",
                             T_mc - T_ball, T_se, "-", "-", tc.T, ti.T, "-");
-            gl_examples::Json j;
+            gl_examples::Json j = ex.summary();
             j.num("albedo", c.a)
                 .num("g", c.g)
                 .num("optical_depth", c.B)
@@ -196,35 +184,8 @@ int main(int argc, char** argv) {
                     " mp_class / mp_impr = Donner & Jensen 2005 multipole with classical / improved terms, slab of B\n"
                     " (d = 50 / sigma_t' for the half-space rows); T rows: diffuse transmittance, MC minus e^{-B};\n"
                     " exact = 1 - H(1) sqrt(1 - a), isotropic half-space only)\n");
-        csv.write(out / "diffusion_profiles.csv");
-        const std::string script = R"PY(
-d = read_csv(r''')PY" + (out / "diffusion_profiles.csv").string() + R"PY(''')
-cols = {k: np.array(v) for k, v in d.items()}
-fig, axes = plt.subplots(2, 3, figsize=(14, 8.5))
-panels = [(0, 0), (1, 0), (2, 0), (3, 0), (4, 0), (4, 1)]
-for ax, (ci, face) in zip(axes.flat, panels):
-    m = (cols['case'] == ci) & (cols['face'] == face)
-    if not m.any(): continue
-    aa, gg, B = cols['albedo'][m][0], cols['g'][m][0], cols['optical_depth'][m][0]
-    st = aa * (1 - gg) + (1 - aa)
-    scale = 1.0 / st**2  # profiles in units of sigma_t'^2
-    x = cols['r_reduced'][m]
-    ax.errorbar(x, cols['mc'][m] * scale, yerr=cols['mc_stderr'][m] * scale, fmt='k.', ms=3, label='Monte Carlo (walk kernel)')
-    if face == 0:
-        ax.loglog(x, cols['dipole'][m] * scale, label='classical dipole (half-space)')
-        ax.loglog(x, cols['improved'][m] * scale, label='improved / PBD (half-space)')
-    ax.loglog(x, cols['multipole_classical'][m] * scale, ':', label='multipole, classical')
-    ax.loglog(x, cols['multipole_improved'][m] * scale, '--', label='multipole, improved')
-    geo = f'slab B = {B:g}' if B > 0 else "half-space (multipole d = 50 mfp')"
-    q = 'R' if face == 0 else 'T'
-    ax.set_title(f"{q}(r): albedo {aa}, g = {gg}, {geo}", fontsize=9)
-    ax.set_xlabel("r sigma_t'"); ax.set_ylabel(f"{q}(r) / sigma_t'^2")
-    ax.set_ylim(1e-7, 1e2)
-    ax.legend(fontsize=6)
-fig.tight_layout()
-fig.savefig(png, dpi=110)
-)PY";
-        gl_examples::plot_with_matplotlib(out / "diffusion_profiles_plot.py", script, out / "diffusion_profiles.png");
+        const auto csv_path = ex.csv("diffusion_profiles.csv", csv);
+        ex.plot("diffusion_profiles", csv_path, out / "diffusion_profiles.png");
         for (const auto& l : json_lines) std::cout << l << "\n";
         std::cout.flush();
         return 0;

@@ -1,0 +1,204 @@
+// examples/common/harness.hpp: the one example harness. An `Example` owns the shared command
+// line (--quality quick|full, --out DIR, --seed S, --threads N), typed options that declare,
+// default and parse in one line, the progress bar, the blocked-parallel loop with its ordered
+// reduction (core/parallel.hpp), CSV files, plots drawn by real .py scripts under
+// examples/plots/, and the JSON summary (the last stdout line) pre-filled with what reproduces
+// the run: example, version, commit, command line, quality, seed, threads and ranks.
+//
+// It is the single place where work splitting over processes, checkpoints and NaN counting plug
+// in: examples that use `parallel` get them without per-example code.
+//
+//   int main(int argc, char** argv) {
+//       return gl_examples::run(argc, argv, "name", "what it reproduces", [&](gl_examples::Example& ex) {
+//           const auto paths = ex.opt<std::uint64_t>("paths", 200000, 2000000, "photon paths");
+//           ex.ready();
+//           ...
+//           return ex.finish(ex.summary().num("R", r));
+//       });
+//   }
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "common/cli.hpp"
+#include "common/output.hpp"
+#include "common/progress.hpp"
+#include "grainlight/core/parallel.hpp"
+
+#ifndef GRAINLIGHT_VERSION_STRING
+#define GRAINLIGHT_VERSION_STRING "unknown"
+#endif
+#ifndef GRAINLIGHT_GIT_COMMIT
+#define GRAINLIGHT_GIT_COMMIT "unknown"
+#endif
+#ifndef GRAINLIGHT_EXAMPLES_DIR
+#define GRAINLIGHT_EXAMPLES_DIR "."
+#endif
+
+namespace gl_examples {
+
+class Example {
+public:
+    Example(int argc, char** argv, std::string program, std::string summary)
+        : cli_(argc, argv, program, std::move(summary)), program_(std::move(program)) {
+        for (int i = 0; i < argc; ++i) command_ += (i ? " " : "") + std::string(argv[i]);
+        cli_.common_options(default_out());
+    }
+
+    /// A typed option with one default: declared for --help, defaulted and parsed in one line.
+    template <class T>
+    T opt(const std::string& name, T def, const std::string& help) {
+        cli_.option(name, help, show(def));
+        return get<T>(name, def);
+    }
+    /// A typed option whose default depends on --quality (quick, full).
+    template <class T>
+    T opt(const std::string& name, T quick, T full, const std::string& help) {
+        cli_.option(name, help, show(quick) + " quick, " + show(full) + " full");
+        return get<T>(name, full_quality() ? full : quick);
+    }
+
+    /// Call after the last opt(): prints --help (and exits) or rejects unknown options, then
+    /// applies --threads and creates --out.
+    void ready() {
+        cli_.finish();
+        full_ = cli_.full_quality();
+        seed_ = cli_.seed();
+        threads_ = cli_.threads();
+        out_ = cli_.out_dir(default_out());
+        ready_ = true;
+    }
+
+    [[nodiscard]] bool full() const { return full_; }
+    [[nodiscard]] const std::filesystem::path& out() const { return out_; }
+    [[nodiscard]] std::uint64_t seed() const { return seed_; }
+    [[nodiscard]] int threads() const { return threads_; }
+    [[nodiscard]] int ranks() const { return 1; }
+    [[nodiscard]] const std::string& name() const { return program_; }
+    [[nodiscard]] const Cli& cli() const { return cli_; }
+
+    /// `work(block, begin, end) -> Partial` over [0, count) in blocks of `block` items on the
+    /// example's threads, merged in block order (identical results on any thread count), with a
+    /// progress bar labelled `label`.
+    template <class Partial, class Work, class Merge>
+    Partial parallel(const std::string& label, std::uint64_t count, std::uint64_t block, Work&& work, Merge&& merge,
+                     Partial init = Partial{}) const {
+        ProgressBar bar(label, grainlight::block_count(count, block));
+        Partial p = grainlight::parallel_blocks<Partial>(
+            count, block, threads_,
+            [&](std::uint64_t b, std::uint64_t begin, std::uint64_t end) {
+                Partial part = work(b, begin, end);
+                bar.advance();
+                return part;
+            },
+            merge, std::move(init));
+        bar.done();
+        return p;
+    }
+
+    /// The JSON summary, pre-filled with what reproduces the run.
+    [[nodiscard]] Json summary() const {
+        Json j;
+        j.str("example", program_)
+            .str("version", GRAINLIGHT_VERSION_STRING)
+            .str("commit", GRAINLIGHT_GIT_COMMIT)
+            .str("command", command_)
+            .str("quality", full_ ? "full" : "quick")
+            .integer("seed", (long long)seed_)
+            .integer("threads", threads_)
+            .integer("ranks", ranks());
+        return j;
+    }
+    /// Print the summary as the last stdout line; returns the exit status 0.
+    int finish(const Json& j) const {
+        std::cout << j.str() << std::endl;
+        return 0;
+    }
+
+    /// Write a CSV into --out.
+    std::filesystem::path csv(const std::string& file, const Csv& table) const {
+        const auto p = out_ / file;
+        table.write(p);
+        return p;
+    }
+    /// Draw `png` from `csv` with examples/plots/<script>.py (Debian's /usr/bin/python3 +
+    /// matplotlib, or $GRAINLIGHT_PYTHON). Returns false with a note when matplotlib is missing:
+    /// the CSV is the result, the plot a bonus.
+    bool plot(const std::string& script, const std::filesystem::path& csv_path, const std::filesystem::path& png) const {
+        const std::filesystem::path py = std::filesystem::path(GRAINLIGHT_EXAMPLES_DIR) / "plots" / (script + ".py");
+        const char* python = std::getenv("GRAINLIGHT_PYTHON");
+        const std::string interp = python ? python : "/usr/bin/python3";
+        const std::string cmd = interp + " '" + py.string() + "' '" + csv_path.string() + "' '" + png.string() + "' 2>&1";
+        FILE* p = popen(cmd.c_str(), "r");
+        if (!p) return false;
+        std::string output;
+        char buf[256];
+        while (fgets(buf, sizeof buf, p)) output += buf;
+        if (pclose(p) != 0) {
+            std::cerr << "note: plot " << png << " not drawn (" << interp << " " << py << "): " << output.substr(0, 300)
+                      << "\n";
+            return false;
+        }
+        return true;
+    }
+
+private:
+    static std::string default_out() { return "out"; }
+    bool full_quality() const { return cli_.full_quality(); }
+    template <class T>
+    static std::string show(const T& v) {
+        std::ostringstream os;
+        if constexpr (std::is_same_v<T, bool>)
+            os << (v ? "on" : "off");
+        else if constexpr (std::is_same_v<T, std::vector<double>>) {
+            for (std::size_t i = 0; i < v.size(); ++i) os << (i ? "," : "") << v[i];
+        } else
+            os << v;
+        return os.str();
+    }
+    template <class T>
+    T get(const std::string& name, const T& def) const {
+        if constexpr (std::is_same_v<T, bool>) {
+            if (!cli_.has(name)) return def;
+            const std::string v = cli_.str(name);
+            if (v.empty() || v == "1" || v == "on" || v == "true") return true;
+            if (v == "0" || v == "off" || v == "false") return false;
+            throw cli_error("--" + name + " = '" + v + "' must be on or off");
+        } else if constexpr (std::is_same_v<T, std::string>) {
+            return cli_.str(name, def);
+        } else if constexpr (std::is_same_v<T, std::vector<double>>) {
+            return cli_.list(name, def);
+        } else if constexpr (std::is_integral_v<T>) {
+            const auto v = cli_.integer(name, std::uint64_t(def));
+            if (v > std::uint64_t(std::numeric_limits<T>::max()))
+                throw cli_error("--" + name + " = " + std::to_string(v) + " is out of range");
+            return T(v);
+        } else {
+            return T(cli_.num(name, double(def)));
+        }
+    }
+    Cli cli_;
+    std::string program_, command_;
+    bool full_ = false, ready_ = false;
+    std::uint64_t seed_ = 1;
+    int threads_ = 1;
+    std::filesystem::path out_;
+};
+
+/// main() of an example: builds the Example and turns exceptions into a message and an exit
+/// status (2: bad arguments, 1: failure).
+template <class Body>
+int run(int argc, char** argv, const char* program, const char* summary, Body&& body) {
+    return run_main(program, [&]() {
+        Example ex(argc, argv, program, summary);
+        return body(ex);
+    });
+}
+
+}  // namespace gl_examples
