@@ -9,6 +9,9 @@
 //   BM_MieSpan/x           LorenzMie(m, x) + amplitudes(span, span): the library
 //   BM_MieSeries/x         LorenzMie(m, x) alone (coefficients a_n, b_n)
 //   BM_MiePerAngle/x       LorenzMie(m, x) + amplitudes(mu) called once per angle
+//   BM_MieKernel/x         amplitudes(span, span) alone on a built series; the counter
+//                          time_per_lane_term = time / (lanes evaluated x N) measures the angle kernel
+//                          against its operation count (11 multiply/FMA + 1 add per angle and term)
 // All: m = 1.33, 180 angles theta_i = pi i / 179 (mu_i = cos theta_i), x = 1e3, 1e4 (1e5 for the
 // library). items/s = angles per second. The counter max_rel_diff is max_i |S - S_plain| / max|S|
 // between the library and the plain version (checked once, before timing).
@@ -156,6 +159,26 @@ void BM_MieSpan(benchmark::State& state) {
     state.counters["finite"] = finite ? 1 : 0;
 }
 BENCHMARK(BM_MieSpan)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond)->ComputeStatistics("min", min_of);
+
+void BM_MieKernel(benchmark::State& state) {
+    const double x = double(state.range(0));
+    const auto mu = grid180();
+    std::vector<ScatteringAmplitudes> out(mu.size());
+    const LorenzMie mie(kWater, x);
+    for (auto _ : state) {
+        mie.amplitudes(mu, out);
+        benchmark::DoNotOptimize(out.data());
+        benchmark::ClobberMemory();
+    }
+    state.SetItemsProcessed(state.iterations() * std::int64_t(mu.size()));
+    // 180 angles pair into 90 evaluated lanes, padded to whole blocks
+    const double lanes = double((90 + detail::kMieLanes - 1) / detail::kMieLanes * detail::kMieLanes);
+    const double terms = double(mie.num_terms() + mie.num_terms() % 2);
+    state.counters["time_per_lane_term"] =
+        benchmark::Counter(lanes * terms, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+    state.counters["lanes_per_block"] = double(detail::kMieLanes);
+}
+BENCHMARK(BM_MieKernel)->Arg(1000)->Arg(10000)->Unit(benchmark::kMicrosecond)->ComputeStatistics("min", min_of);
 
 void BM_MieSeries(benchmark::State& state) {
     const double x = double(state.range(0));
