@@ -66,8 +66,8 @@ public:
         const std::size_t G = cells_.size();
         const F s = u * F(G);
         const std::size_t j = s >= F(1) ? std::min(std::size_t(s), G - 1) : 0;
-        const auto [lo, hi] = cells_[j];
-        return lo + find_interval(std::size_t(hi - lo) + 2, [&](std::size_t k) { return cdf[lo + k] <= u; });
+        const std::size_t lo = cells_[j].lo, hi = cells_[j].hi;
+        return lo + find_interval(hi - lo + 2, [&](std::size_t k) { return cdf[lo + k] <= u; });
     }
     [[nodiscard]] std::size_t size() const noexcept { return cells_.size(); }
 
