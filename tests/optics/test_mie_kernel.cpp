@@ -1,4 +1,5 @@
-// Tests of the blocked SIMD amplitude kernel of optics/lorenz_mie.hpp (issue 13): the span
+// Tests of the blocked SIMD amplitude kernel of optics/lorenz_mie.hpp (issue 13; and the GOA
+// ray-phase sincos of optics/goa.hpp at the end): the span
 // overload, its theta / pi - theta pairing and the per-angle calls against an independent
 // textbook evaluation of the same series (Bohren & Huffman 1983 Eqs. 4.74, 4.46-4.47: the
 // pi_n / tau_n upward recurrence with the division by n, one angle at a time).
@@ -9,6 +10,8 @@
 #include <limits>
 #include <vector>
 
+#include "grainlight/core/rng.hpp"
+#include "grainlight/optics/goa.hpp"
 #include "grainlight/optics/lorenz_mie.hpp"
 
 using grainlight::LorenzMie;
@@ -113,4 +116,27 @@ TEST_CASE("Mie kernel: x = 1e5 is finite and obeys the optical theorem and the 1
     CHECK(std::abs(out[0].S1 - out[0].S2) <= 1e-12 * std::abs(out[0].S1));
     CHECK(std::abs(out[179].S1 + out[179].S2) <= 1e-10 * std::abs(out[179].S1));
     CHECK(q.qext == Approx(2.0).margin(0.01));
+}
+
+TEST_CASE("GOA ray-phase sincos agrees with std::sin / std::cos", "[optics][goa]") {
+    // The inline reduction + polynomial used for the GOA ray phases (optics/goa.hpp) against the
+    // C library on |x| from 1e-8 to 8e5 rad (the phases of alpha up to ~1e5) and at multiples of
+    // pi/2 (the quadrant boundaries of the reduction), and the std fallback beyond.
+    auto rng = grainlight::Pcg32::from_key(77);
+    double worst = 0;
+    for (double scale : {1e-8, 1e-3, 1.0, 10.0, 1e3, 1e5, 7.9e5, 1e7}) {
+        for (int i = 0; i < 200000; ++i) {
+            const double x = scale * (2 * rng.uniform<double>() - 1);
+            double s, c;
+            grainlight::detail::goa_sincos(x, s, c);
+            worst = std::max({worst, std::abs(s - std::sin(x)), std::abs(c - std::cos(x))});
+        }
+    }
+    for (int k = -20000; k <= 20000; ++k) {
+        const double x = k * 1.5707963267948966;
+        double s, c;
+        grainlight::detail::goa_sincos(x, s, c);
+        worst = std::max({worst, std::abs(s - std::sin(x)), std::abs(c - std::cos(x))});
+    }
+    CHECK(worst <= 5e-16);
 }
