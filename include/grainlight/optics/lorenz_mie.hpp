@@ -347,19 +347,23 @@ private:
             psi[0] = s;
             chi[0] = c;
             double psi_pp = c, chi_pp = -s, psi_p = s, chi_p = c;  // (n-2), (n-1) in registers
-            for (std::size_t n = 1; n <= N; ++n) {
+            std::size_t n = 1;
+            for (; n <= nup; ++n) {  // two independent chains in one loop: each hides the other's latency
+                const double f = double(2 * n - 1) * ix;
+                const double ch = f * chi_p - chi_pp, ps = f * psi_p - psi_pp;
+                chi[n] = ch;
+                psi[n] = ps;
+                chi_pp = chi_p;
+                chi_p = ch;
+                psi_pp = psi_p;
+                psi_p = ps;
+            }
+            for (; n <= N; ++n) {
                 const double f = double(2 * n - 1) * ix;
                 const double ch = f * chi_p - chi_pp;
                 chi[n] = ch;
                 chi_pp = chi_p;
                 chi_p = ch;
-            }
-            for (std::size_t n = 1; n <= nup; ++n) {
-                const double f = double(2 * n - 1) * ix;
-                const double ps = f * psi_p - psi_pp;
-                psi[n] = ps;
-                psi_pp = psi_p;
-                psi_p = ps;
             }
             if (nup < N) {
                 std::vector<double> r(N - nup + 1);  // r[n - nup - 1] = r_n, n = nup+1 .. N+1
@@ -379,43 +383,56 @@ private:
         const std::size_t nstart = std::max<std::size_t>(N, std::size_t(std::sqrt(mx2))) + 16;
         const C d0 = detail::riccati_ratio_cf(nstart, C(mxr, mxi)) - double(nstart) / C(mxr, mxi);
         double zr = d0.real() + double(nstart) * imxr, zi = d0.imag() + double(nstart) * imxi;
-        for (std::size_t n = nstart; n >= 1; --n) {
-            if (n <= N) {
-                const double dn = double(n);
-                const double Dnr = zr - dn * imxr, Dni = zi - dn * imxi;
-                const double ps = psi[n], ps1 = psi[n - 1];
-                const double xr = ps, xi = -chi[n], x1r = ps1, x1i = -chi[n - 1];  // xi_n = psi_n - i chi_n
-                const double nx = dn * ix;
-                // da = D/m + n/x, db = D m + n/x
-                const double dar = Dnr * imr - Dni * imi + nx, dai = Dnr * imi + Dni * imr;
-                const double dbr = Dnr * mr - Dni * mi + nx, dbi = Dnr * mi + Dni * mr;
-                // a = (da psi_n - psi_{n-1}) / (da xi_n - xi_{n-1}), b likewise with db.
-                const double nar = dar * ps - ps1, nai = dai * ps;
-                const double Dar = dar * xr - dai * xi - x1r, Dai = dar * xi + dai * xr - x1i;
-                const double nbr = dbr * ps - ps1, nbi = dbi * ps;
-                const double Dbr = dbr * xr - dbi * xi - x1r, Dbi = dbr * xi + dbi * xr - x1i;
-                const double ia = 1.0 / (Dar * Dar + Dai * Dai), ib = 1.0 / (Dbr * Dbr + Dbi * Dbi);
-                // conj(num / den) = conj(num) den / |den|^2 (van de Hulst / Wiscombe convention)
-                const double are = (nar * Dar + nai * Dai) * ia, aim = (nar * Dai - nai * Dar) * ia;
-                const double bre = (nbr * Dbr + nbi * Dbi) * ib, bim = (nbr * Dbi - nbi * Dbr) * ib;
-                ab_a[2 * (n - 1)] = are;
-                ab_a[2 * (n - 1) + 1] = aim;
-                ab_b[2 * (n - 1)] = bre;
-                ab_b[2 * (n - 1) + 1] = bim;
-                const double w = (2 * dn + 1) / (dn * (dn + 1));
-                double* q = coef_.data() + 5 * (n - 1);
-                q[0] = w * are;
-                q[1] = w * aim;
-                q[2] = w * bre;
-                q[3] = w * bim;
-                q[4] = (dn + 1) / dn;
+        // a_n, b_n from D_n (the part off the serial chain; n runs downward, so 1/(n+1) is the
+        // previous call's 1/n: one division for w_n = 1/n + 1/(n+1) and (n+1)/n = 1 + 1/n).
+        double inv_up = 1.0 / double(N + 1);
+        auto emit = [&](std::size_t n, double Dnr, double Dni) {
+            const double dn = double(n);
+            const double ps = psi[n], ps1 = psi[n - 1];
+            const double xr = ps, xi = -chi[n], x1r = ps1, x1i = -chi[n - 1];  // xi_n = psi_n - i chi_n
+            const double nx = dn * ix;
+            // da = D/m + n/x, db = D m + n/x
+            const double dar = Dnr * imr - Dni * imi + nx, dai = Dnr * imi + Dni * imr;
+            const double dbr = Dnr * mr - Dni * mi + nx, dbi = Dnr * mi + Dni * mr;
+            // a = (da psi_n - psi_{n-1}) / (da xi_n - xi_{n-1}), b likewise with db.
+            const double nar = dar * ps - ps1, nai = dai * ps;
+            const double Dar = dar * xr - dai * xi - x1r, Dai = dar * xi + dai * xr - x1i;
+            const double nbr = dbr * ps - ps1, nbi = dbi * ps;
+            const double Dbr = dbr * xr - dbi * xi - x1r, Dbi = dbr * xi + dbi * xr - x1i;
+            const double ia = 1.0 / (Dar * Dar + Dai * Dai), ib = 1.0 / (Dbr * Dbr + Dbi * Dbi);
+            // conj(num / den) = conj(num) den / |den|^2 (van de Hulst / Wiscombe convention)
+            const double are = (nar * Dar + nai * Dai) * ia, aim = (nar * Dai - nai * Dar) * ia;
+            const double bre = (nbr * Dbr + nbi * Dbi) * ib, bim = (nbr * Dbi - nbi * Dbr) * ib;
+            ab_a[2 * (n - 1)] = are;
+            ab_a[2 * (n - 1) + 1] = aim;
+            ab_b[2 * (n - 1)] = bre;
+            ab_b[2 * (n - 1) + 1] = bim;
+            const double inv_n = 1.0 / dn;
+            const double w = inv_n + inv_up;  // (2n+1)/(n(n+1))
+            inv_up = inv_n;
+            double* q = coef_.data() + 5 * (n - 1);
+            q[0] = w * are;
+            q[1] = w * aim;
+            q[2] = w * bre;
+            q[3] = w * bim;
+            q[4] = 1.0 + inv_n;  // (n+1)/n
+        };
+        if (mi == 0 && zi == 0) {
+            // Real m x (no absorption): D_n is real and the chain is one real division per order.
+            for (std::size_t n = nstart; n >= 1; --n) {
+                if (n <= N) emit(n, zr - double(n) * imxr, 0.0);
+                zr = double(2 * n - 1) * imxr - 1.0 / zr;
             }
-            // 1/z = conj(z)/|z|^2: two divisions in parallel keep the chain short.
-            const double z2 = zr * zr + zi * zi;
-            const double s = double(2 * n - 1);
-            const double wr = zr / z2, wi = zi / z2;
-            zr = s * imxr - wr;
-            zi = s * imxi + wi;
+        } else {
+            for (std::size_t n = nstart; n >= 1; --n) {
+                if (n <= N) emit(n, zr - double(n) * imxr, zi - double(n) * imxi);
+                // 1/z = conj(z)/|z|^2: two divisions in parallel keep the chain short.
+                const double z2 = zr * zr + zi * zi;
+                const double s = double(2 * n - 1);
+                const double wr = zr / z2, wi = zi / z2;
+                zr = s * imxr - wr;
+                zi = s * imxi + wi;
+            }
         }
     }
 
