@@ -89,6 +89,43 @@ TEST_CASE("Guide table finds the same interval as the binary search", "[core][di
     CHECK(spike.sample(0.5) == 2500);
 }
 
+template <class F>
+void check_node_guide_equals_binary_search(std::span<const F> x) {
+    const detail::NodeGuide guide(x);
+    std::vector<F> v = {x.front(), x.back(), F(x.front() - 1), F(x.back() + 1), std::numeric_limits<F>::quiet_NaN(),
+                        std::numeric_limits<F>::infinity(), -std::numeric_limits<F>::infinity()};
+    for (F c : x) {
+        v.push_back(c);
+        v.push_back(std::nextafter(c, F(-10)));
+        v.push_back(std::nextafter(c, F(10)));
+    }
+    auto rng = Pcg32::from_key(12);
+    for (int k = 0; k < 200000; ++k)
+        v.push_back(F(double(x.front()) + (double(x.back()) - double(x.front())) * rng.uniform<double>()));
+    std::size_t mismatches = 0;
+    for (F u : v) {
+        const std::size_t ref = find_interval(x.size(), [&](std::size_t k) { return x[k] <= u; });
+        if (guide.find(x.data(), x.size(), u) != ref) ++mismatches;
+    }
+    CHECK(mismatches == 0);
+}
+
+TEST_CASE("Node guide (pdf / eval / invert) finds the same interval as the binary search", "[core][distribution][guide]") {
+    for (std::size_t n : {std::size_t(2), std::size_t(3), std::size_t(64), std::size_t(16384)}) {
+        INFO("nodes = " << n);
+        std::vector<double> x, f;
+        peaked_table(n, x, f);
+        check_node_guide_equals_binary_search<double>(x);
+        std::vector<float> xf, ff;
+        peaked_table(n, xf, ff);
+        check_node_guide_equals_binary_search<float>(xf);
+        // shifted, scaled, far from 0 (the widening is relative to |x_0| + |x_n|)
+        std::vector<double> y(x.size());
+        for (std::size_t i = 0; i < x.size(); ++i) y[i] = 1e6 + 3.0 * x[i];
+        check_node_guide_equals_binary_search<double>(y);
+    }
+}
+
 TEST_CASE("Guide-table samplers stay the monotone inverse CDF", "[core][distribution][guide]") {
     std::vector<double> x, f;
     peaked_table(16384, x, f);

@@ -11,7 +11,9 @@
 /// its u can fall in, then a branchless search inside that range (almost always empty). The cost
 /// is O(1) expected, independent of the node count, and the interval found is exactly the one
 /// the binary search over the whole CDF finds: the mapping u -> x stays the monotone inverse CDF
-/// (bit-identical to the plain search), so `invert` is still its inverse.
+/// (bit-identical to the plain search), so `invert` is still its inverse. `pdf`, `eval` and
+/// `invert` find the node interval of x the same way (a guide uniform in x; same interval as the
+/// binary search).
 #pragma once
 
 #include <algorithm>
@@ -78,6 +80,53 @@ private:
     std::vector<Cell> cells_;
 };
 
+/// Guide table over strictly increasing nodes x_0 < ... < x_{n-1}, cells uniform in x (widened
+/// by 8 eps (|x_0| + |x_{n-1}|) for the rounding of the cell index): find(v) returns the largest
+/// i <= n - 2 with x_i <= v (0 if none), the same as find_interval over all nodes, in O(1)
+/// expected for v uniform on [x_0, x_{n-1}] (used by pdf / eval / invert).
+class NodeGuide {
+public:
+    NodeGuide() = default;
+    template <std::floating_point F>
+    explicit NodeGuide(std::span<const F> x) {
+        const std::size_t n = x.size();
+        if (n < 2) return;
+        const std::size_t G = n - 1;
+        cells_.resize(G);
+        x0_ = double(x[0]);
+        const double range = double(x[n - 1]) - x0_;
+        scale_ = double(G) / range;
+        const double delta = 8 * double(std::numeric_limits<F>::epsilon()) * (std::abs(x0_) + std::abs(double(x[n - 1])));
+        auto last_le = [&](double v, std::size_t from) {  // largest i in [from, n-2] with x[i] <= v
+            std::size_t i = from;
+            while (i + 1 <= n - 2 && double(x[i + 1]) <= v) ++i;
+            return i;
+        };
+        std::size_t lo = 0, hi = 0;
+        for (std::size_t j = 0; j < G; ++j) {
+            lo = last_le(x0_ + range * double(j) / double(G) - delta, lo);
+            hi = last_le(x0_ + range * double(j + 1) / double(G) + delta, std::max(hi, lo));
+            cells_[j] = {std::uint32_t(lo), std::uint32_t(hi)};
+        }
+    }
+    template <std::floating_point F>
+    [[nodiscard]] std::size_t find(const F* x, std::size_t n, F v) const noexcept {
+        if (cells_.empty()) return find_interval(n, [&](std::size_t k) { return x[k] <= v; });
+        const std::size_t G = cells_.size();
+        const double s = (double(v) - x0_) * scale_;
+        const std::size_t j = s >= 1 ? std::min(std::size_t(std::min(s, 4e18)), G - 1) : 0;  // NaN -> 0
+        const std::size_t lo = cells_[j].lo, hi = cells_[j].hi;
+        return lo + find_interval(hi - lo + 2, [&](std::size_t k) { return x[lo + k] <= v; });
+    }
+
+private:
+    struct Cell {
+        std::uint32_t lo, hi;
+    };
+    std::vector<Cell> cells_;
+    double x0_ = 0, scale_ = 0;
+};
+
 }  // namespace detail
 
 /// Discrete distribution over {0, ..., n-1} with non-negative weights.
@@ -141,7 +190,7 @@ public:
     /// Normalized density at x (0 outside [min, max]).
     [[nodiscard]] F pdf(F x) const noexcept {
         if (!(x >= x_.front() && x <= x_.back())) return 0;
-        const std::size_t i = find_interval(x_.size(), [&](std::size_t k) { return x_[k] <= x; });
+        const std::size_t i = xguide_.find(x_.data(), x_.size(), x);
         return f_[i] / integral_;
     }
     /// Sample x for u in [0, 1) by exact inversion of the CDF.
@@ -158,7 +207,7 @@ public:
     [[nodiscard]] F invert(F x) const noexcept {
         if (x <= x_.front()) return 0;
         if (x >= x_.back()) return 1;
-        const std::size_t i = find_interval(x_.size(), [&](std::size_t k) { return x_[k] <= x; });
+        const std::size_t i = xguide_.find(x_.data(), x_.size(), x);
         const F t = (x - x_[i]) / (x_[i + 1] - x_[i]);
         return cdf_[i] + t * (cdf_[i + 1] - cdf_[i]);
     }
@@ -194,9 +243,11 @@ private:
         for (auto& c : cdf_) c = F(double(c) / acc);
         cdf_.back() = 1;
         guide_ = detail::CdfGuide(std::span<const F>(cdf_));
+        xguide_ = detail::NodeGuide(std::span<const F>(x_));
     }
     std::vector<F> x_, f_, cdf_;
     detail::CdfGuide guide_;
+    detail::NodeGuide xguide_;
     F integral_ = 0;
 };
 
@@ -229,6 +280,7 @@ public:
         for (auto& c : cdf_) c = F(double(c) / acc);
         cdf_.back() = 1;
         guide_ = detail::CdfGuide(std::span<const F>(cdf_));
+        xguide_ = detail::NodeGuide(std::span<const F>(x_));
     }
     [[nodiscard]] F integral() const noexcept { return integral_; }
     [[nodiscard]] F min() const noexcept { return x_.front(); }
@@ -239,7 +291,7 @@ public:
     /// Un-normalized value (linear interpolation), 0 outside the support.
     [[nodiscard]] F eval(F x) const noexcept {
         if (!(x >= x_.front() && x <= x_.back())) return 0;
-        const std::size_t i = find_interval(x_.size(), [&](std::size_t k) { return x_[k] <= x; });
+        const std::size_t i = xguide_.find(x_.data(), x_.size(), x);
         const F t = (x - x_[i]) / (x_[i + 1] - x_[i]);
         return f_[i] + t * (f_[i + 1] - f_[i]);
     }
@@ -269,7 +321,7 @@ public:
     [[nodiscard]] F invert(F x) const noexcept {
         if (x <= x_.front()) return 0;
         if (x >= x_.back()) return 1;
-        const std::size_t i = find_interval(x_.size(), [&](std::size_t k) { return x_[k] <= x; });
+        const std::size_t i = xguide_.find(x_.data(), x_.size(), x);
         const F h = x_[i + 1] - x_[i];
         const F t = (x - x_[i]) / h;
         const F part = h * (f_[i] * t + F(0.5) * (f_[i + 1] - f_[i]) * t * t);
@@ -279,6 +331,7 @@ public:
 private:
     std::vector<F> x_, f_, cdf_;
     detail::CdfGuide guide_;
+    detail::NodeGuide xguide_;
     F integral_ = 0;
 };
 
