@@ -5,12 +5,22 @@
 /// particle's diffraction peak lives in 1 - cos(theta) < 1e-5.
 ///
 /// Construction validates (throws grainlight::invalid_argument); sampling is noexcept.
+///
+/// Sampling finds the CDF interval through a guide table (Chen & Asau 1974, "cutpoint method";
+/// Devroye 1986 Sec. III.2.4): one cell per interval in u, each holding the range of intervals
+/// its u can fall in, then a branchless search inside that range (almost always empty). The cost
+/// is O(1) expected, independent of the node count, and the interval found is exactly the one
+/// the binary search over the whole CDF finds: the mapping u -> x stays the monotone inverse CDF
+/// (bit-identical to the plain search), so `invert` is still its inverse. `pdf`, `eval` and
+/// `invert` find the node interval of x the same way (a guide uniform in x; same interval as the
+/// binary search).
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 #include <concepts>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <span>
 #include <string>
@@ -20,6 +30,104 @@
 #include "grainlight/core/math.hpp"
 
 namespace grainlight {
+
+namespace detail {
+
+/// Guide table over a non-decreasing CDF 0 = c_0 <= ... <= c_n = 1: cell j of G covers
+/// u in [j/G, (j+1)/G) (widened by a few ulp for the rounding of u G) and stores the first and
+/// last candidate of the interval search there. find(u) returns the largest i <= n - 1 with
+/// c_i <= u (0 if none), the same as find_interval over the whole CDF.
+class CdfGuide {
+public:
+    CdfGuide() = default;
+    template <std::floating_point F>
+    explicit CdfGuide(std::span<const F> cdf) {
+        const std::size_t n = cdf.size();
+        if (n < 2) return;
+        const std::size_t G = n - 1;
+        cells_.resize(G);
+        const double eps = 4 * double(std::numeric_limits<F>::epsilon());
+        auto last_le = [&](double v, std::size_t from) {  // largest i in [from, n-2] with cdf[i] <= v
+            std::size_t i = from;
+            while (i + 1 <= n - 2 && double(cdf[i + 1]) <= v) ++i;
+            return i;
+        };
+        std::size_t lo = 0, hi = 0;
+        for (std::size_t j = 0; j < G; ++j) {
+            const double low = double(j) / double(G) * (1 - eps);
+            const double high = double(j + 1) / double(G) * (1 + eps);
+            lo = last_le(low, lo);
+            hi = last_le(high, std::max(hi, lo));
+            cells_[j] = {std::uint32_t(lo), std::uint32_t(hi)};
+        }
+    }
+    template <std::floating_point F>
+    [[nodiscard]] std::size_t find(const F* cdf, std::size_t n, F u) const noexcept {
+        if (cells_.empty()) return find_interval(n, [&](std::size_t k) { return cdf[k] <= u; });
+        if (!(u >= F(0))) return 0;  // u < 0 or NaN: no c_i <= u but c_0 = 0 (as find_interval)
+        const std::size_t G = cells_.size();
+        const F s = u * F(G);
+        const std::size_t j = s >= F(1) ? std::min(std::size_t(s), G - 1) : 0;
+        const std::size_t lo = cells_[j].lo, hi = cells_[j].hi;
+        return lo + find_interval(hi - lo + 2, [&](std::size_t k) { return cdf[lo + k] <= u; });
+    }
+    [[nodiscard]] std::size_t size() const noexcept { return cells_.size(); }
+
+private:
+    struct Cell {
+        std::uint32_t lo, hi;
+    };
+    std::vector<Cell> cells_;
+};
+
+/// Guide table over strictly increasing nodes x_0 < ... < x_{n-1}, cells uniform in x (widened
+/// by 8 eps (|x_0| + |x_{n-1}|) for the rounding of the cell index): find(v) returns the largest
+/// i <= n - 2 with x_i <= v (0 if none), the same as find_interval over all nodes, in O(1)
+/// expected for v uniform on [x_0, x_{n-1}] (used by pdf / eval / invert).
+class NodeGuide {
+public:
+    NodeGuide() = default;
+    template <std::floating_point F>
+    explicit NodeGuide(std::span<const F> x) {
+        const std::size_t n = x.size();
+        if (n < 2) return;
+        const std::size_t G = n - 1;
+        cells_.resize(G);
+        x0_ = double(x[0]);
+        const double range = double(x[n - 1]) - x0_;
+        scale_ = double(G) / range;
+        const double delta = 8 * double(std::numeric_limits<F>::epsilon()) * (std::abs(x0_) + std::abs(double(x[n - 1])));
+        auto last_le = [&](double v, std::size_t from) {  // largest i in [from, n-2] with x[i] <= v
+            std::size_t i = from;
+            while (i + 1 <= n - 2 && double(x[i + 1]) <= v) ++i;
+            return i;
+        };
+        std::size_t lo = 0, hi = 0;
+        for (std::size_t j = 0; j < G; ++j) {
+            lo = last_le(x0_ + range * double(j) / double(G) - delta, lo);
+            hi = last_le(x0_ + range * double(j + 1) / double(G) + delta, std::max(hi, lo));
+            cells_[j] = {std::uint32_t(lo), std::uint32_t(hi)};
+        }
+    }
+    template <std::floating_point F>
+    [[nodiscard]] std::size_t find(const F* x, std::size_t n, F v) const noexcept {
+        if (cells_.empty()) return find_interval(n, [&](std::size_t k) { return x[k] <= v; });
+        const std::size_t G = cells_.size();
+        const double s = (double(v) - x0_) * scale_;
+        const std::size_t j = s >= 1 ? std::min(std::size_t(std::min(s, 4e18)), G - 1) : 0;  // NaN -> 0
+        const std::size_t lo = cells_[j].lo, hi = cells_[j].hi;
+        return lo + find_interval(hi - lo + 2, [&](std::size_t k) { return x[lo + k] <= v; });
+    }
+
+private:
+    struct Cell {
+        std::uint32_t lo, hi;
+    };
+    std::vector<Cell> cells_;
+    double x0_ = 0, scale_ = 0;
+};
+
+}  // namespace detail
 
 /// Discrete distribution over {0, ..., n-1} with non-negative weights.
 template <std::floating_point F = double>
@@ -41,13 +149,14 @@ public:
         total_ = F(acc);
         for (auto& c : cdf_) c = F(double(c) / acc);
         cdf_.back() = F(1);
+        guide_ = detail::CdfGuide(std::span<const F>(cdf_));
     }
     [[nodiscard]] std::size_t size() const noexcept { return cdf_.empty() ? 0 : cdf_.size() - 1; }
     [[nodiscard]] F total() const noexcept { return total_; }
     [[nodiscard]] F pmf(std::size_t i) const noexcept { return cdf_[i + 1] - cdf_[i]; }
     /// Index for u in [0, 1); optionally the pmf and u re-scaled to [0, 1) within the chosen bin.
     [[nodiscard]] std::size_t sample(F u, F* pmf_out = nullptr, F* u_remapped = nullptr) const noexcept {
-        const std::size_t i = find_interval(cdf_.size(), [&](std::size_t k) { return cdf_[k] <= u; });
+        const std::size_t i = guide_.find(cdf_.data(), cdf_.size(), u);
         const F p = cdf_[i + 1] - cdf_[i];
         if (pmf_out) *pmf_out = p;
         if (u_remapped) *u_remapped = p > 0 ? std::min((u - cdf_[i]) / p, F(1) - std::numeric_limits<F>::epsilon()) : F(0);
@@ -57,6 +166,7 @@ public:
 
 private:
     std::vector<F> cdf_;
+    detail::CdfGuide guide_;
     F total_ = 0;
 };
 
@@ -80,12 +190,12 @@ public:
     /// Normalized density at x (0 outside [min, max]).
     [[nodiscard]] F pdf(F x) const noexcept {
         if (!(x >= x_.front() && x <= x_.back())) return 0;
-        const std::size_t i = find_interval(x_.size(), [&](std::size_t k) { return x_[k] <= x; });
+        const std::size_t i = xguide_.find(x_.data(), x_.size(), x);
         return f_[i] / integral_;
     }
     /// Sample x for u in [0, 1) by exact inversion of the CDF.
     [[nodiscard]] F sample(F u, F* pdf_out = nullptr, std::size_t* index = nullptr) const noexcept {
-        const std::size_t i = find_interval(cdf_.size(), [&](std::size_t k) { return cdf_[k] <= u; });
+        const std::size_t i = guide_.find(cdf_.data(), cdf_.size(), u);
         const F dcdf = cdf_[i + 1] - cdf_[i];
         F t = dcdf > 0 ? (u - cdf_[i]) / dcdf : F(0);
         t = std::clamp(t, F(0), F(1));
@@ -97,7 +207,7 @@ public:
     [[nodiscard]] F invert(F x) const noexcept {
         if (x <= x_.front()) return 0;
         if (x >= x_.back()) return 1;
-        const std::size_t i = find_interval(x_.size(), [&](std::size_t k) { return x_[k] <= x; });
+        const std::size_t i = xguide_.find(x_.data(), x_.size(), x);
         const F t = (x - x_[i]) / (x_[i + 1] - x_[i]);
         return cdf_[i] + t * (cdf_[i + 1] - cdf_[i]);
     }
@@ -132,8 +242,12 @@ private:
         integral_ = F(acc);
         for (auto& c : cdf_) c = F(double(c) / acc);
         cdf_.back() = 1;
+        guide_ = detail::CdfGuide(std::span<const F>(cdf_));
+        xguide_ = detail::NodeGuide(std::span<const F>(x_));
     }
     std::vector<F> x_, f_, cdf_;
+    detail::CdfGuide guide_;
+    detail::NodeGuide xguide_;
     F integral_ = 0;
 };
 
@@ -165,6 +279,8 @@ public:
         integral_ = F(acc);
         for (auto& c : cdf_) c = F(double(c) / acc);
         cdf_.back() = 1;
+        guide_ = detail::CdfGuide(std::span<const F>(cdf_));
+        xguide_ = detail::NodeGuide(std::span<const F>(x_));
     }
     [[nodiscard]] F integral() const noexcept { return integral_; }
     [[nodiscard]] F min() const noexcept { return x_.front(); }
@@ -175,14 +291,14 @@ public:
     /// Un-normalized value (linear interpolation), 0 outside the support.
     [[nodiscard]] F eval(F x) const noexcept {
         if (!(x >= x_.front() && x <= x_.back())) return 0;
-        const std::size_t i = find_interval(x_.size(), [&](std::size_t k) { return x_[k] <= x; });
+        const std::size_t i = xguide_.find(x_.data(), x_.size(), x);
         const F t = (x - x_[i]) / (x_[i + 1] - x_[i]);
         return f_[i] + t * (f_[i + 1] - f_[i]);
     }
     [[nodiscard]] F pdf(F x) const noexcept { return eval(x) / integral_; }
     /// Exact inversion: inside an interval the CDF is quadratic in t.
     [[nodiscard]] F sample(F u, F* pdf_out = nullptr) const noexcept {
-        const std::size_t i = find_interval(cdf_.size(), [&](std::size_t k) { return cdf_[k] <= u; });
+        const std::size_t i = guide_.find(cdf_.data(), cdf_.size(), u);
         const F h = x_[i + 1] - x_[i];
         const F f0 = f_[i], f1 = f_[i + 1];
         // Solve (f0 t + (f1 - f0) t^2 / 2) h = (u - cdf_i) * integral for t in [0, 1].
@@ -205,7 +321,7 @@ public:
     [[nodiscard]] F invert(F x) const noexcept {
         if (x <= x_.front()) return 0;
         if (x >= x_.back()) return 1;
-        const std::size_t i = find_interval(x_.size(), [&](std::size_t k) { return x_[k] <= x; });
+        const std::size_t i = xguide_.find(x_.data(), x_.size(), x);
         const F h = x_[i + 1] - x_[i];
         const F t = (x - x_[i]) / h;
         const F part = h * (f_[i] * t + F(0.5) * (f_[i + 1] - f_[i]) * t * t);
@@ -214,6 +330,8 @@ public:
 
 private:
     std::vector<F> x_, f_, cdf_;
+    detail::CdfGuide guide_;
+    detail::NodeGuide xguide_;
     F integral_ = 0;
 };
 
