@@ -265,3 +265,9 @@ TEST_CASE("point_based: single scattering through the octree equals Eq. 5 summed
         CHECK(brute > 0);
     }
 }
+
+// The capability that replaced the HG sniffing: HG opts in through widened_phase_value (ADL),
+// an isotropic phase does not; the old trait name still compiles (deprecated alias).
+static_assert(grainlight::WidenableLobePhase<grainlight::HenyeyGreenstein<float, grainlight::Spectrum<1, float>>>);
+static_assert(!grainlight::WidenableLobePhase<grainlight::IsotropicPhase<float, grainlight::Spectrum<1, float>>>);
+static_assert(grainlight::detail::is_henyey_greenstein<grainlight::HenyeyGreenstein<float, grainlight::Spectrum<3, float>>>::value);

@@ -35,7 +35,7 @@
 ///    around the sample (instead of a plain clamp). For aggregated nodes with an HG phase the
 ///    lobes are widened by the node's direction spread and the cone it subtends (`widen_lobes`).
 ///  - multiple (Eq. 7) at P_k, same cut: sigma_s w_i sigma_t^3 L_o(rho sigma_t, z sigma_t, -omega)
-///    from an MsTable (precompute/ms_table.hpp) per channel.
+///    from an MsTable (integrators/ms_table.hpp; built by precompute/ms_table.hpp) per channel.
 ///  - full solution (Eq. 9): L = single + sum_k weight_k (double(P_k) + mult(P_k)).
 ///
 /// Direction convention (phase/concepts.hpp): phase arguments are propagation directions; d_v is
@@ -63,21 +63,40 @@
 #include "grainlight/core/ray.hpp"
 #include "grainlight/core/rng.hpp"
 #include "grainlight/geometry/aabb.hpp"
+#include "grainlight/integrators/ms_table.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/optics/fresnel.hpp"
+#include "grainlight/phase/concepts.hpp"
 #include "grainlight/phase/henyey_greenstein.hpp"
-#include "grainlight/precompute/ms_table.hpp"
 #include "grainlight/scene/lights.hpp"
 #include "grainlight/scene/shapes.hpp"
 #include "grainlight/traversal/octree.hpp"
 
 namespace grainlight {
 
-namespace detail {
-template <class P>
-struct is_henyey_greenstein : std::false_type {};
+/// Widened lobe of a Henyey-Greenstein phase: the lobe averaged over incoming directions spread
+/// with mean cosine c is approximated by HG with g c (exact first moment: the mean cosine of a
+/// lobe convolved with a spread of mean cosine c is g c). Value per unit solid angle at the
+/// scattering cosine `cos_theta`. The customization point of `WidenableLobePhase` (found by ADL):
+/// a phase type of another namespace opts in by providing its own `widened_phase_value`.
 template <std::floating_point F, class S>
-struct is_henyey_greenstein<HenyeyGreenstein<F, S>> : std::true_type {};
+[[nodiscard]] inline F widened_phase_value(const HenyeyGreenstein<F, S>& p, F cos_theta, F c) noexcept {
+    return henyey_greenstein_cos_pdf(cos_theta, F(p.g()) * std::clamp(c, F(0), F(1))) * inv_two_pi_v<F>;
+}
+
+/// A phase function that can report its lobe blurred by a spread of incoming directions of mean
+/// cosine c in [0, 1] (c = 1: the lobe itself), as `widened_phase_value(phase, cos_theta, c)`.
+/// The point-based renderer uses it for aggregated tree-cut nodes; other phase functions are
+/// evaluated at the node's mean direction.
+template <class P>
+concept WidenableLobePhase = PhaseFunction<P> && requires(const P& p, typename P::Float x) {
+    { widened_phase_value(p, x, x) } -> std::convertible_to<typename P::Float>;
+};
+
+namespace detail {
+/// Deprecated (one release): the old sniffing trait, now the capability WidenableLobePhase.
+template <class P>
+using is_henyey_greenstein = std::bool_constant<WidenableLobePhase<P>>;
 }  // namespace detail
 
 /// A light surface sample on the boundary: position, unit outward normal, area it represents.
@@ -122,6 +141,9 @@ struct PointBasedOptions {
     /// node's direction coherence and the cone it subtends from P. Cuts the Alg. 1 aggregation
     /// bias of peaked lobes (g = 0.7, eps1 = 0.5: from -13 % to -3 % on double scattering).
     bool widen_lobes = true;
+    /// Multiple-scattering table lookup bilinear between direction-bin centres (false: nearest
+    /// bin, as a plain table read).
+    bool ms_interpolate = true;
     bool single = true, double_ = true, multiple = true;  ///< components to compute
     int leaf_items = 8;             ///< octree leaf size (paper: 8)
 };
@@ -271,11 +293,11 @@ public:
                 const Vec3<F> ey = glm::cross(dv, ex);
                 const F cz = glm::dot(to_cam, dv);
                 const F phi = std::atan2(std::abs(glm::dot(to_cam, ey)), glm::dot(to_cam, ex));
-                const std::size_t j = ms_->direction_bin(double(cz), double(phi));
+                const MsDirection dir = ms_->direction(double(cz), double(phi), opt_.ms_interpolate);
                 S m;
                 for (std::size_t c = 0; c < S::size; ++c) {
                     const F st = sig_t[c];
-                    m[c] = F(ms_->eval_bin(c, double(rho * st), double(z * st), j)) * st * st * st;
+                    m[c] = F(ms_->eval_dir(c, double(rho * st), double(z * st), dir)) * st * st * st;
                 }
                 mul += sig_s * wv * m;
             }
@@ -307,11 +329,8 @@ public:
     /// direction spread of mean cosine c is g c); other phase functions use the mean direction.
     [[nodiscard]] S light_phase(const Vec3<F>& d, const Vec3<F>& w, F coherence) const noexcept {
         const Phase& ph = medium_.phase();
-        if constexpr (detail::is_henyey_greenstein<Phase>::value) {
-            if (coherence < F(1)) {
-                const F gc = F(ph.g()) * std::clamp(coherence, F(0), F(1));
-                return S(henyey_greenstein_cos_pdf(F(glm::dot(d, w)), gc) * inv_two_pi_v<F>);
-            }
+        if constexpr (WidenableLobePhase<Phase>) {
+            if (coherence < F(1)) return S(F(widened_phase_value(ph, F(glm::dot(d, w)), coherence)));
         }
         return ph.eval(d, w).value;
     }
