@@ -336,7 +336,7 @@ int main(int argc, char** argv) {
         gl_examples::Cli cli(argc, argv, "wang18_point_based",
                              "Wang18 point-based single + double + multiple + bounced scattering vs the VPT reference");
         cli.common_options("out/wang18_point_based")
-            .option("vpt-spp", "VPT samples per pixel and channel, multiple of 8 (default: 128 quick, 2048 full)")
+            .option("vpt-spp", "VPT samples per pixel and channel, multiple of 8 (default: 512 quick, 4096 full)")
             .option("surface-samples", "light surface samples on the sphere (default: 6000 quick, 40000 full)")
             .option("bounce-generations", "reflections carried by the bounced term: 1 (Eq. 8 as in the paper) or 2 (default)")
             .option("bias-study", "flag: the multiple-scattering bias study (optical radius 2, 5, 20, 50), docs/wang18.md");
@@ -344,7 +344,7 @@ int main(int argc, char** argv) {
         const bool full = cli.full_quality();
         const auto out = cli.out_dir("out/wang18_point_based");
         const int threads = cli.threads();
-        const int vpt_spp = int(cli.integer("vpt-spp", full ? 2048 : 128));
+        const int vpt_spp = int(cli.integer("vpt-spp", full ? 4096 : 512));
         const int n_surface = int(cli.integer("surface-samples", full ? 40000 : 6000));
         if (vpt_spp < 16 || vpt_spp % kBatches != 0 || n_surface < 16)
             throw gl_examples::cli_error("--vpt-spp >= 16 and a multiple of 8, --surface-samples >= 16");
