@@ -784,11 +784,14 @@ private:
         for (int k = 0; k < k_max; ++k) {
             const F q = (F(k) + xi) / F(k_max);
             const F dk = std::min(dmax, -std::log1p(-q * norm) / sb);  // Eq. 10 (jittered)
-            const F pdf = sb * std::exp(-sb * dk) / norm;
             S dbl(F(0)), mul(F(0));
             const Vec3<F> Pk = o + dk * w;
             if (prim) gather_point(Pk, w, dbl, mul);
-            const S wk = medium_.transmittance(dk) / (pdf * F(k_max));
+            // exp(-sigma_t,c d_k) / (k_max pdf(d_k)) with pdf = sb exp(-sb d_k) / norm, written
+            // without the two exponentials (each underflows on optically long segments).
+            S wk;
+            for (std::size_t c = 0; c < S::size; ++c)
+                wk[c] = std::exp(-(sig_t[c] - sb) * dk) * norm / (sb * F(k_max));
             dsum += wk * dbl;
             msum += wk * mul;
             if (bounced) {
