@@ -38,6 +38,7 @@
 
 #include "grainlight/core/error.hpp"
 #include "grainlight/core/math.hpp"
+#include "grainlight/core/spectrum.hpp"
 #include "grainlight/core/vector.hpp"
 
 namespace grainlight {
@@ -96,8 +97,9 @@ public:
     }
 
     /// Precompute with the walk kernel (defined in precompute/ms_table.hpp; include it).
-    template <class Phase, class Albedo>
-    [[nodiscard]] static MsTable build(const Phase& phase, const Albedo& albedo, const MsTableOptions& opt) {
+    template <class Phase>
+    [[nodiscard]] static MsTable build(const Phase& phase, const Spectrum<N, typename Phase::Float>& albedo,
+                                       const MsTableOptions& opt) {
         return build_ms_table<N>(phase, albedo, opt);  // ADL on Phase: found at instantiation
     }
     /// Save in the shared container (precompute/ms_table.hpp; include it). Throws io_error.
