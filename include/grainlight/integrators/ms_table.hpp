@@ -44,6 +44,8 @@
 namespace grainlight {
 
 struct MsTableOptions;
+template <class M>
+struct InfiniteMediumScene;  // precompute/ms_table.hpp
 
 /// Grid of an MsTable: cylindrical cells (rho, z) in mean free paths times direction bins.
 struct MsTableGrid {
@@ -76,6 +78,13 @@ template <std::size_t N>
 class MsTable {
 public:
     static constexpr std::uint32_t file_version = 1;
+    /// Container kind "MSTB" (the same value as precompute/ms_table.hpp's ms_table_file_kind).
+    static constexpr std::uint32_t file_kind = std::uint32_t('M') | (std::uint32_t('S') << 8) |
+                                               (std::uint32_t('T') << 16) | (std::uint32_t('B') << 24);
+    /// Deprecated (one release): the infinite-medium walk scene is now
+    /// grainlight::InfiniteMediumScene (precompute/ms_table.hpp).
+    template <class M>
+    using InfiniteMediumScene = grainlight::InfiniteMediumScene<M>;
 
     MsTable() = default;
 

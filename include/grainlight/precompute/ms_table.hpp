@@ -61,6 +61,7 @@ struct MsTableOptions {
 
 /// File kind of a stored MsTable in the shared container.
 inline constexpr std::uint32_t ms_table_file_kind = fourcc("MSTB");
+static_assert(ms_table_file_kind == MsTable<1>::file_kind, "MsTable::file_kind must match the container kind");
 
 /// An infinite homogeneous medium as a WalkScene (no surfaces, everything in medium 0).
 template <class M>
