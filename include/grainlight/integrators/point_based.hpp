@@ -32,18 +32,25 @@
 ///  - double (Eq. 6) at P_k, over the Alg. 1 tree cut (or the two-step cut of Sec. 4.3):
 ///        sigma_s^2 sum_i w_i exp(-sigma_t r_i) / r_i^2 p(d_i, r^_i) p(r^_i, -omega),
 ///    with the weak 1/r^2 singularity handled by averaging 1/r^2 over a ball of radius r_min
-///    around the sample (instead of a plain clamp). For aggregated nodes with an HG phase the
-///    lobes are widened by the node's direction spread and the cone it subtends (`widen_lobes`).
+///    around the sample (instead of a plain clamp). For aggregated nodes of a WidenableLobePhase
+///    (HG) the lobes are widened by the node's direction spread and the cone it subtends
+///    (`widen_lobes`).
 ///  - multiple (Eq. 7) at P_k, same cut: sigma_s w_i sigma_t^3 L_o(rho sigma_t, z sigma_t, -omega)
 ///    from an MsTable (integrators/ms_table.hpp; built by precompute/ms_table.hpp) per channel.
-///  - full solution (Eq. 9): L = single + sum_k weight_k (double(P_k) + mult(P_k)).
+///  - bounced (Sec. 3.5.5, Eq. 8) at P_k: `bounce_samples` surface samples store the light that
+///    reaches them from inside times the inside Fresnel reflectance as a diffuse exitance M_j;
+///    sigma_s sum_j (M_j / pi) Omega_j exp(-sigma_t q_j) p(q^_j, -omega) over their own octree and
+///    Alg. 1 cut (Omega_j: the solid angle of the sample, bounded by that of a disk of its area),
+///    plus Eqs. 6 and 7 from secondary volume samples along inward rays from the surface samples
+///    (the events after the first one that follows the reflection); `bounce_generations` = 2 adds
+///    the light reflected twice (see build_bounce_samples).
+///  - full solution (Eq. 9): L = single + sum_k weight_k (double(P_k) + mult(P_k) + bounced(P_k)).
 ///
 /// Direction convention (phase/concepts.hpp): phase arguments are propagation directions; d_v is
 /// the direction the light travels, -omega the direction toward the camera.
 ///
-/// Not included (see docs/wang18.md): Eq. 8 (bounced multiple scattering through surface
-/// samples), visibility between samples, environment light on surface samples. The boundary must
-/// be convex (a single refraction in, as in the paper's Sec. 3.3). The Fresnel-reflected light on
+/// Not included (see docs/wang18.md): visibility between samples, environment light on surface
+/// samples, reflections beyond the second between two events. The boundary must be convex (a single refraction in, as in the paper's Sec. 3.3). The Fresnel-reflected light on
 /// the outside of the boundary and unscattered light are not part of the result.
 ///
 /// The renderer is deterministic for a seed: light samples come from `rng` at construction,
@@ -171,7 +178,8 @@ struct PointBasedOptions {
     /// table is an infinite-medium response, so it counts light that crossed the boundary
     /// between events. Subtract the response of the source mirrored across the local tangent
     /// plane shifted outward by `ms_image_offset` transport mean free paths (method of images;
-    /// needs a TangentPlaneBoundary). false: the paper's Eq. 7 as is.
+    /// needs a TangentPlaneBoundary). Off by default (the paper's Eq. 7 as is): it removes the
+    /// over-count at 5 mean free paths but over-corrects by ~20 % at 20-50 (docs/wang18.md).
     bool ms_boundary_image = false;
     F ms_image_offset = F(0);
     bool single = true, double_ = true, multiple = true;  ///< components to compute
