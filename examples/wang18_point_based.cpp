@@ -64,6 +64,8 @@ constexpr int kComp = 5;  // single, double, multiple, bounced, total
 const char* const kCompName[kComp] = {"single", "double", "multiple", "bounced", "total"};
 constexpr int kBatches = 8;
 
+double g_eps1 = 0;  // Alg. 1 solid-angle threshold (--eps1; 0: the quality default)
+
 double cpu_seconds() {
     timespec ts{};
     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
@@ -132,8 +134,8 @@ CaseResult run_case(const Case& cs, const gl::MsTable<3>& table, bool full, int 
     po.camera_bounces = thick ? 0 : (full ? 2 : 1);
     po.light_bounces = thick ? 0 : 2;
     po.max_optical_depth = thick ? 8.0f : 10.0f;
-    po.cut.eps1 = full ? 0.2f : 1.0f;
-    po.cut.eps2 = full ? 0.04f : 0.2f;
+    po.cut.eps1 = g_eps1 > 0 ? float(g_eps1) : (full ? 0.2f : 1.0f);
+    po.cut.eps2 = 0.2f * po.cut.eps1;
     po.two_step_depth = 3;
     po.bounce_samples = full ? 4096 : 512;
     po.bounce_rays = full ? 8 : 4;
@@ -338,6 +340,7 @@ int main(int argc, char** argv) {
         cli.common_options("out/wang18_point_based")
             .option("vpt-spp", "VPT samples per pixel and channel, multiple of 8 (default: 512 quick, 4096 full)")
             .option("surface-samples", "light surface samples on the sphere (default: 6000 quick, 20000 full; the thick case uses twice as many at quick)")
+            .option("eps1", "Alg. 1 solid-angle threshold eps1 in sr (default 1.0 quick, 0.2 full; eps2 = eps1 / 5)")
             .option("bounce-generations", "reflections carried by the bounced term: 1 (Eq. 8 as in the paper) or 2 (default)")
             .option("bias-study", "flag: the multiple-scattering bias study (optical radius 2, 5, 20, 50), docs/wang18.md");
         cli.finish();
@@ -353,6 +356,8 @@ int main(int argc, char** argv) {
         if (threads > 0) omp_set_num_threads(threads);
 #endif
         const bool study = cli.has("bias-study");
+        g_eps1 = cli.num("eps1", 0.0);
+        if (g_eps1 < 0 || g_eps1 > 10) throw gl_examples::cli_error("--eps1 must be in (0, 10]");
         const int bounce_generations = int(cli.integer("bounce-generations", 2));
         if (bounce_generations < 1 || bounce_generations > 2) throw gl_examples::cli_error("--bounce-generations must be 1 or 2");
 
