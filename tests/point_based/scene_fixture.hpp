@@ -11,6 +11,8 @@
 #include "grainlight/integrators/walk.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/phase/henyey_greenstein.hpp"
+#include "grainlight/phase/isotropic.hpp"
+#include "grainlight/precompute/ms_table.hpp"
 #include "grainlight/scene/scene.hpp"
 
 namespace pb_test {

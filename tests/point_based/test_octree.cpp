@@ -175,3 +175,24 @@ TEST_CASE("octree: bad input", "[octree]") {
                    [&](const Tree::Item&) { ++calls; });
     CHECK(calls == 0);
 }
+
+TEST_CASE("octree: node directions stay unit vectors for tiny float weights", "[octree]") {
+    // Regression: the mean direction of a node was normalised from the weighted sum, whose
+    // squared length underflows in float for weights ~1e-20 (secondary samples deep in an
+    // optically thick medium) and gave NaN directions.
+    using FT = Octree<float, Spectrum<1, float>>;
+    std::vector<FT::Item> v(64);
+    Rng rng = Rng::from_key(3);
+    for (std::size_t i = 0; i < v.size(); ++i) {
+        v[i].p = Vec3<float>(rng.uniform<float>(), rng.uniform<float>(), rng.uniform<float>());
+        v[i].d = glm::normalize(Vec3<float>(0.3f, 0.2f, 1.0f) + 0.2f * Vec3<float>(rng.uniform<float>(), 0.0f, 0.0f));
+        v[i].w = Spectrum<1, float>(1e-21f);
+        v[i].extent = Aabb<float>(v[i].p, v[i].p);
+        v[i].id = std::uint32_t(i);
+    }
+    const FT tree(std::move(v));
+    for (const auto& n : tree.nodes()) {
+        CHECK(std::isfinite(n.d.x + n.d.y + n.d.z));
+        CHECK(glm::length(n.d) == Approx(1.0).epsilon(1e-5));
+    }
+}

@@ -32,18 +32,25 @@
 ///  - double (Eq. 6) at P_k, over the Alg. 1 tree cut (or the two-step cut of Sec. 4.3):
 ///        sigma_s^2 sum_i w_i exp(-sigma_t r_i) / r_i^2 p(d_i, r^_i) p(r^_i, -omega),
 ///    with the weak 1/r^2 singularity handled by averaging 1/r^2 over a ball of radius r_min
-///    around the sample (instead of a plain clamp). For aggregated nodes with an HG phase the
-///    lobes are widened by the node's direction spread and the cone it subtends (`widen_lobes`).
+///    around the sample (instead of a plain clamp). For aggregated nodes of a WidenableLobePhase
+///    (HG) the lobes are widened by the node's direction spread and the cone it subtends
+///    (`widen_lobes`).
 ///  - multiple (Eq. 7) at P_k, same cut: sigma_s w_i sigma_t^3 L_o(rho sigma_t, z sigma_t, -omega)
-///    from an MsTable (precompute/ms_table.hpp) per channel.
-///  - full solution (Eq. 9): L = single + sum_k weight_k (double(P_k) + mult(P_k)).
+///    from an MsTable (integrators/ms_table.hpp; built by precompute/ms_table.hpp) per channel.
+///  - bounced (Sec. 3.5.5, Eq. 8) at P_k: `bounce_samples` surface samples store the light that
+///    reaches them from inside times the inside Fresnel reflectance as a diffuse exitance M_j;
+///    sigma_s sum_j (M_j / pi) Omega_j exp(-sigma_t q_j) p(q^_j, -omega) over their own octree and
+///    Alg. 1 cut (Omega_j: the solid angle of the sample, bounded by that of a disk of its area),
+///    plus Eqs. 6 and 7 from secondary volume samples along inward rays from the surface samples
+///    (the events after the first one that follows the reflection); `bounce_generations` = 2 adds
+///    the light reflected twice (see build_bounce_samples).
+///  - full solution (Eq. 9): L = single + sum_k weight_k (double(P_k) + mult(P_k) + bounced(P_k)).
 ///
 /// Direction convention (phase/concepts.hpp): phase arguments are propagation directions; d_v is
 /// the direction the light travels, -omega the direction toward the camera.
 ///
-/// Not included (see docs/wang18.md): Eq. 8 (bounced multiple scattering through surface
-/// samples), visibility between samples, environment light on surface samples. The boundary must
-/// be convex (a single refraction in, as in the paper's Sec. 3.3). The Fresnel-reflected light on
+/// Not included (see docs/wang18.md): visibility between samples, environment light on surface
+/// samples, reflections beyond the second between two events. The boundary must be convex (a single refraction in, as in the paper's Sec. 3.3). The Fresnel-reflected light on
 /// the outside of the boundary and unscattered light are not part of the result.
 ///
 /// The renderer is deterministic for a seed: light samples come from `rng` at construction,
@@ -62,23 +69,60 @@
 #include "grainlight/core/math.hpp"
 #include "grainlight/core/ray.hpp"
 #include "grainlight/core/rng.hpp"
+#include "grainlight/core/warp.hpp"
 #include "grainlight/geometry/aabb.hpp"
+#include "grainlight/integrators/ms_table.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/optics/fresnel.hpp"
+#include "grainlight/phase/concepts.hpp"
 #include "grainlight/phase/henyey_greenstein.hpp"
-#include "grainlight/precompute/ms_table.hpp"
 #include "grainlight/scene/lights.hpp"
 #include "grainlight/scene/shapes.hpp"
 #include "grainlight/traversal/octree.hpp"
 
 namespace grainlight {
 
-namespace detail {
-template <class P>
-struct is_henyey_greenstein : std::false_type {};
+/// Widened lobe of a Henyey-Greenstein phase: the lobe averaged over incoming directions spread
+/// with mean cosine c is approximated by HG with g c (exact first moment: the mean cosine of a
+/// lobe convolved with a spread of mean cosine c is g c). Value per unit solid angle at the
+/// scattering cosine `cos_theta`. The customization point of `WidenableLobePhase` (found by ADL):
+/// a phase type of another namespace opts in by providing its own `widened_phase_value`.
 template <std::floating_point F, class S>
-struct is_henyey_greenstein<HenyeyGreenstein<F, S>> : std::true_type {};
+[[nodiscard]] inline F widened_phase_value(const HenyeyGreenstein<F, S>& p, F cos_theta, F c) noexcept {
+    return henyey_greenstein_cos_pdf(cos_theta, F(p.g()) * std::clamp(c, F(0), F(1))) * inv_two_pi_v<F>;
+}
+
+/// A phase function that can report its lobe blurred by a spread of incoming directions of mean
+/// cosine c in [0, 1] (c = 1: the lobe itself), as `widened_phase_value(phase, cos_theta, c)`.
+/// The point-based renderer uses it for aggregated tree-cut nodes; other phase functions are
+/// evaluated at the node's mean direction.
+template <class P>
+concept WidenableLobePhase = PhaseFunction<P> && requires(const P& p, typename P::Float x) {
+    { widened_phase_value(p, x, x) } -> std::convertible_to<typename P::Float>;
+};
+
+namespace detail {
+/// Deprecated (one release): the old sniffing trait, now the capability WidenableLobePhase.
+template <class P>
+using is_henyey_greenstein = std::bool_constant<WidenableLobePhase<P>>;
 }  // namespace detail
+
+/// Nearest boundary point and outward normal of a sphere seen from an inside point p: the local
+/// tangent plane used by the boundary image of the multiple-scattering term. The customization
+/// point of `TangentPlaneBoundary` (found by ADL; a convex mesh boundary provides its own).
+template <std::floating_point F>
+inline void boundary_tangent_plane(const SphereShape<F>& s, const Vec3<F>& p, Vec3<F>& q, Vec3<F>& n) noexcept {
+    const Vec3<F> r = p - s.center;
+    const F l = glm::length(r);
+    n = l > F(0) ? r / l : Vec3<F>(F(0), F(0), F(1));
+    q = s.center + s.radius * n;
+}
+
+/// A boundary that can report the tangent plane nearest to an inside point.
+template <class B, class F>
+concept TangentPlaneBoundary = requires(const B& b, const Vec3<F>& p, Vec3<F>& q, Vec3<F>& n) {
+    boundary_tangent_plane(b, p, q, n);
+};
 
 /// A light surface sample on the boundary: position, unit outward normal, area it represents.
 template <std::floating_point F>
@@ -118,19 +162,45 @@ struct PointBasedOptions {
     CutCriterion<F> cut{};          ///< Alg. 1 thresholds
     std::uint32_t two_step_depth = 0;  ///< > 0: two-step traversal stopping at this depth (Sec. 4.3)
     bool use_density_factor = false;   ///< apply Eq. 4's k_v to single scattering
+    /// Give the part of a volume sample's box that lies outside the boundary to its inside part
+    /// (needs a TangentPlaneBoundary): without it the box kernel of Eq. 5 loses the light of
+    /// boxes that stick out of the surface (optically thick media: -24 % single scattering at
+    /// 20 mean free paths with boxes of ~0.6 mfp).
+    bool clip_boxes = true;
     /// Widen the phase lobes of aggregated cut nodes (HG phase only; see `light_phase`): the
     /// node's direction coherence and the cone it subtends from P. Cuts the Alg. 1 aggregation
     /// bias of peaked lobes (g = 0.7, eps1 = 0.5: from -13 % to -3 % on double scattering).
     bool widen_lobes = true;
+    /// Multiple-scattering table lookup bilinear between direction-bin centres (false: nearest
+    /// bin, as a plain table read).
+    bool ms_interpolate = true;
+    /// Boundary image of the multiple-scattering term (our addition, not in the paper): the
+    /// table is an infinite-medium response, so it counts light that crossed the boundary
+    /// between events. Subtract the response of the source mirrored across the local tangent
+    /// plane shifted outward by `ms_image_offset` transport mean free paths (method of images;
+    /// needs a TangentPlaneBoundary). Off by default (the paper's Eq. 7 as is): it removes the
+    /// over-count at 5 mean free paths but over-corrects by ~20 % at 20-50 (docs/wang18.md).
+    bool ms_boundary_image = false;
+    F ms_image_offset = F(0);
     bool single = true, double_ = true, multiple = true;  ///< components to compute
+    /// Eq. 8 bounced multiple scattering through surface samples (needs `bounce_samples` > 0).
+    bool bounced = true;
+    /// Surface samples that carry the inside illumination (a stride subset of the light surface
+    /// samples, areas scaled to cover the boundary); 0: no bounced term.
+    int bounce_samples = 1024;
+    int bounce_rays = 4;            ///< inward rays per bounce sample to gather its incoming light
+    int bounce_k_max = 4;           ///< camera-sample count on those rays (Eq. 10)
+    bool bounce_secondary = true;   ///< secondary volume samples: events 2, 3, ... after a reflection
+    int bounce_generations = 2;
+    bool bounce_series = false;     ///< generation 2: sum the later generations as a geometric series     ///< 1: light reflected once; 2: + twice, later ones as a series
     int leaf_items = 8;             ///< octree leaf size (paper: 8)
 };
 
 /// Radiance split by component (W sr^-1 m^-2 per channel).
 template <class S>
 struct PointBasedComponents {
-    S single{0}, double_{0}, multiple{0};
-    [[nodiscard]] S total() const noexcept { return single + double_ + multiple; }
+    S single{0}, double_{0}, multiple{0}, bounced{0};
+    [[nodiscard]] S total() const noexcept { return single + double_ + multiple + bounced; }
 };
 
 /// The point-based renderer for one medium object (see the file comment).
@@ -183,13 +253,37 @@ public:
         sigma_bar_ = medium.sigma_t().average();
         step_ = opt.volume_step > F(0) ? opt.volume_step : F(0.1) / sigma_bar_;
         r_min_ = opt.r_min > F(0) ? opt.r_min : step_;
+        {
+            const F g = F(medium.phase().mean_cosine().average());
+            for (std::size_t c = 0; c < S::size; ++c) {
+                const F a = medium.albedo()[c];
+                image_offset_[c] = opt.ms_image_offset / (medium.sigma_t()[c] * std::max(F(1e-3), F(1) - a * g));
+            }
+        }
+        check_argument(opt.bounce_samples >= 0, "PointBasedRenderer", "bounce_samples", opt.bounce_samples, ">= 0");
+        check_argument(opt.bounce_rays >= 1 && opt.bounce_rays <= 1024, "PointBasedRenderer", "bounce_rays",
+                       opt.bounce_rays, "[1, 1024]");
+        check_argument(opt.bounce_k_max >= 1 && opt.bounce_k_max <= 4096, "PointBasedRenderer", "bounce_k_max",
+                       opt.bounce_k_max, "[1, 4096]");
         build_samples(surface, light, rng);
+        if (opt.bounced && opt.bounce_samples > 0) build_bounce_samples(surface, rng);
     }
 
     [[nodiscard]] const Octree<F, S>& volume_tree() const noexcept { return tree_; }
     [[nodiscard]] const std::vector<Box>& boxes() const noexcept { return boxes_; }
     [[nodiscard]] std::size_t volume_sample_count() const noexcept { return tree_.items().size(); }
     [[nodiscard]] F volume_step() const noexcept { return step_; }
+    /// Switch the boundary image of the multiple term (PointBasedOptions::ms_boundary_image) after
+    /// construction, for studies that compare both on the same light samples (the bounce samples
+    /// keep the light they gathered at construction).
+    void set_ms_boundary_image(bool on) noexcept { opt_.ms_boundary_image = on; }
+    /// Octree of the bounce surface samples (Eq. 8): p = position, d = inward normal, w = I_j =
+    /// A_j M_j / pi (M_j: radiant exitance of the light reflected inward at the sample).
+    [[nodiscard]] const Octree<F, S>& surface_tree() const noexcept { return surf_tree_; }
+    /// Secondary volume samples of the bounced light (second and later events after a reflection).
+    [[nodiscard]] const Octree<F, S>& bounce_volume_tree() const noexcept { return sec_tree_; }
+    /// Ratio of twice- to once-reflected light per channel (0 with one generation).
+    [[nodiscard]] const S& bounce_ratio() const noexcept { return bounce_ratio_; }
 
     /// Radiance along a camera ray (outside the boundary), by component.
     [[nodiscard]] PointBasedComponents<S> radiance_components(const Ray<F>& ray, Rng& rng) const noexcept {
@@ -248,6 +342,13 @@ public:
     /// As above with an explicit cut criterion and two-step stopping depth (0 = one step).
     void gather_point(const Vec3<F>& P, const Vec3<F>& omega, S& dbl, S& mul, const CutCriterion<F>& cut,
                       std::uint32_t two_step_depth) const noexcept {
+        gather_point_tree(tree_, P, omega, dbl, mul, cut, two_step_depth);
+    }
+    /// As gather_point over any sample tree (the light's volume samples, or the secondary volume
+    /// samples of the bounced light).
+    void gather_point_tree(const Octree<F, S>& tree, const Vec3<F>& P, const Vec3<F>& omega, S& dbl, S& mul,
+                           const CutCriterion<F>& cut, std::uint32_t two_step_depth) const noexcept {
+        if (tree.items().empty()) return;
         const Vec3<F> to_cam = -omega;
         const Phase& ph = medium_.phase();
         auto pval = [&](const Vec3<F>& a, const Vec3<F>& b) { return F(ph.eval(a, b).value.average()); };
@@ -264,18 +365,19 @@ public:
                 dbl += sig_s * sig_s * wv * medium_.transmittance(r) * pp * k;
             }
             if (opt_.multiple && ms_) {
-                const F z = glm::dot(rv, dv);
-                const Vec3<F> radial = rv - z * dv;
-                const F rho = glm::length(radial);
-                const Vec3<F> ex = rho > F(0) ? radial / rho : Frame<F>(dv).s;
-                const Vec3<F> ey = glm::cross(dv, ex);
-                const F cz = glm::dot(to_cam, dv);
-                const F phi = std::atan2(std::abs(glm::dot(to_cam, ey)), glm::dot(to_cam, ex));
-                const std::size_t j = ms_->direction_bin(double(cz), double(phi));
-                S m;
-                for (std::size_t c = 0; c < S::size; ++c) {
-                    const F st = sig_t[c];
-                    m[c] = F(ms_->eval_bin(c, double(rho * st), double(z * st), j)) * st * st * st;
+                S m = table_response(rv, dv, to_cam);
+                if constexpr (TangentPlaneBoundary<Boundary, F>) {
+                    if (opt_.ms_boundary_image) {
+                        Vec3<F> q, n;
+                        boundary_tangent_plane(boundary_, xv, q, n);
+                        const F h = std::max(F(0), glm::dot(q - xv, n));  // depth of the source
+                        const Vec3<F> dm = dv - F(2) * glm::dot(dv, n) * n;
+                        for (std::size_t c = 0; c < S::size; ++c) {
+                            const Vec3<F> xm = xv + F(2) * (h + image_offset_[c]) * n;
+                            const F mc = table_response_channel(c, P - xm, dm, to_cam);
+                            m[c] = std::max(F(0), m[c] - mc);
+                        }
+                    }
                 }
                 mul += sig_s * wv * m;
             }
@@ -290,14 +392,46 @@ public:
         auto item_fn = [&](const Item& it) { contrib(it.p, it.d, it.w, F(1), F(1)); };
         if (two_step_depth > 0) {
             std::array<std::uint32_t, 1024> buf;
-            const std::size_t n = tree_.coarse_cut(P, to_cam, cut, pval, two_step_depth, std::span(buf));
+            const std::size_t n = tree.coarse_cut(P, to_cam, cut, pval, two_step_depth, std::span(buf));
             if (n <= buf.size()) {
-                tree_.tree_cut_from(std::span<const std::uint32_t>(buf.data(), n), P, to_cam, cut, pval, node_fn,
+                tree.tree_cut_from(std::span<const std::uint32_t>(buf.data(), n), P, to_cam, cut, pval, node_fn,
                                     item_fn);
                 return;
             }
         }
-        tree_.tree_cut(P, to_cam, cut, pval, node_fn, item_fn);
+        tree.tree_cut(P, to_cam, cut, pval, node_fn, item_fn);
+    }
+
+    /// Table response (Eq. 7 without the source power) at offset rv = P - x_v from a source
+    /// travelling along dv, toward `to_cam`, per channel: sigma_t^3 L_o(rho sigma_t, z sigma_t, .).
+    [[nodiscard]] S table_response(const Vec3<F>& rv, const Vec3<F>& dv, const Vec3<F>& to_cam) const noexcept {
+        S m;
+        const MsDirection dir = table_direction(rv, dv, to_cam);
+        const F z = glm::dot(rv, dv);
+        const F rho = glm::length(rv - z * dv);
+        for (std::size_t c = 0; c < S::size; ++c) {
+            const F st = medium_.sigma_t()[c];
+            m[c] = F(ms_->eval_dir(c, double(rho * st), double(z * st), dir)) * st * st * st;
+        }
+        return m;
+    }
+    [[nodiscard]] F table_response_channel(std::size_t c, const Vec3<F>& rv, const Vec3<F>& dv,
+                                           const Vec3<F>& to_cam) const noexcept {
+        const MsDirection dir = table_direction(rv, dv, to_cam);
+        const F z = glm::dot(rv, dv);
+        const F rho = glm::length(rv - z * dv);
+        const F st = medium_.sigma_t()[c];
+        return F(ms_->eval_dir(c, double(rho * st), double(z * st), dir)) * st * st * st;
+    }
+    [[nodiscard]] MsDirection table_direction(const Vec3<F>& rv, const Vec3<F>& dv, const Vec3<F>& to_cam) const noexcept {
+        const F z = glm::dot(rv, dv);
+        const Vec3<F> radial = rv - z * dv;
+        const F rho = glm::length(radial);
+        const Vec3<F> ex = rho > F(0) ? radial / rho : Frame<F>(dv).s;
+        const Vec3<F> ey = glm::cross(dv, ex);
+        const F cz = glm::dot(to_cam, dv);
+        const F phi = std::atan2(std::abs(glm::dot(to_cam, ey)), glm::dot(to_cam, ex));
+        return ms_->direction(double(cz), double(phi), opt_.ms_interpolate);
     }
 
     /// Phase value for light arriving along the mean direction d of a node whose unit directions
@@ -307,13 +441,52 @@ public:
     /// direction spread of mean cosine c is g c); other phase functions use the mean direction.
     [[nodiscard]] S light_phase(const Vec3<F>& d, const Vec3<F>& w, F coherence) const noexcept {
         const Phase& ph = medium_.phase();
-        if constexpr (detail::is_henyey_greenstein<Phase>::value) {
-            if (coherence < F(1)) {
-                const F gc = F(ph.g()) * std::clamp(coherence, F(0), F(1));
-                return S(henyey_greenstein_cos_pdf(F(glm::dot(d, w)), gc) * inv_two_pi_v<F>);
-            }
+        if constexpr (WidenableLobePhase<Phase>) {
+            if (coherence < F(1)) return S(F(widened_phase_value(ph, F(glm::dot(d, w)), coherence)));
         }
         return ph.eval(d, w).value;
+    }
+
+    /// Bounced multiple scattering (Eq. 8) emission density at P toward -omega from the tree cut
+    /// over the bounce surface samples: sigma_s sum_j I_j cos_j exp(-sigma_t q_j) / q_j^2
+    /// p(q^_j, -omega), with the reflected light of sample j treated as diffuse (I_j = A_j M_j / pi,
+    /// cos_j between its inward normal and q^_j = (P - s_j) / q_j), as in the paper.
+    [[nodiscard]] S gather_bounced(const Vec3<F>& P, const Vec3<F>& omega) const noexcept {
+        return gather_bounced(P, omega, opt_.cut);
+    }
+    [[nodiscard]] S gather_bounced(const Vec3<F>& P, const Vec3<F>& omega, const CutCriterion<F>& cut) const noexcept {
+        S acc(F(0));
+        if (surf_tree_.items().empty()) return acc;
+        const Vec3<F> to_cam = -omega;
+        const Phase& ph = medium_.phase();
+        auto pval = [&](const Vec3<F>& a, const Vec3<F>& b) { return F(ph.eval(a, b).value.average()); };
+        // The solid angle of a sample of area A at distance q, cosine cj: A cj / q^2 far away,
+        // bounded by 2 pi near it (that of a disk of the same area seen on its axis,
+        // 2 pi (1 - 1 / sqrt(1 + A cj / (pi q^2)))), so a receiver next to a sample stays finite.
+        auto contrib = [&](const Vec3<F>& xs, const Vec3<F>& ns, const S& ws, F area) {
+            const Vec3<F> q = P - xs;
+            const F r = glm::length(q);
+            if (!(r > F(0))) return;
+            const Vec3<F> qh = q / r;
+            const F cj = glm::dot(qh, ns);
+            if (cj <= F(0)) return;
+            const F x = area * cj / (pi_v<F> * r * r);
+            const F omega_s = x < F(1e-3) ? area * cj / (r * r) * (F(1) - F(0.75) * x)
+                                          : F(2) * pi_v<F> * (F(1) - F(1) / std::sqrt(F(1) + x));
+            acc += ws * (omega_s / area) * medium_.transmittance(r) * ph.eval(qh, to_cam).value;
+        };
+        surf_tree_.tree_cut(
+            P, to_cam, cut, pval,
+            [&](const typename Octree<F, S>::Node& nd) { contrib(nd.p, nd.d, nd.w, F(nd.end - nd.begin) * bounce_area_); },
+            [&](const Item& it) { contrib(it.p, it.d, it.w, bounce_area_); });
+        return medium_.sigma_s() * acc;
+    }
+    /// Eq. 8 summed over every bounce surface sample individually (tests, reference).
+    [[nodiscard]] S gather_bounced_brute_force(const Vec3<F>& P, const Vec3<F>& omega) const noexcept {
+        CutCriterion<F> c;
+        c.eps1 = F(0);
+        c.eps2 = F(0);
+        return gather_bounced(P, omega, c);
     }
 
     /// Brute-force double/multiple sum over every volume sample individually (eps1 = eps2 = 0:
@@ -363,6 +536,7 @@ private:
                         it.w = phi * medium_.transmittance(u0) * step_;
                         Box bx{it.p, fr.s, fr.t, dir, F(0.5) * side, F(0.5) * side, F(0.5) * step_,
                                F(1) / (side * side * step_), s.area};
+                        if (opt_.clip_boxes) bx.inv_volume /= inside_fraction(bx);
                         const Vec3<F> hext = glm::abs(bx.e1) * bx.h1 + glm::abs(bx.e2) * bx.h2 + glm::abs(bx.d) * bx.hd;
                         it.extent = Aabb<F>(it.p - hext, it.p + hext);
                         it.id = std::uint32_t(boxes_.size());
@@ -398,6 +572,169 @@ private:
         }
     }
 
+    /// Bounce surface samples (Sec. 3.5.5). Generation 1: the light arriving from inside at each
+    /// sample (single + double + multiple radiance gathered along `bounce_rays` cosine-
+    /// distributed inward rays, the same estimator as a camera ray inside) times the Fresnel
+    /// reflectance seen from inside, stored as a diffuse exitance M_j. The reflected light then
+    /// enters the medium again: the surface samples carry it to the first scattering after the
+    /// reflection (Eq. 8, `surface_tree`), and secondary volume samples along `bounce_rays`
+    /// inward rays per surface sample carry it to the second and later events (Eqs. 6 and 7 over
+    /// `bounce_volume_tree`). Generation 2 (`bounce_generations` = 2): the same gather of the
+    /// bounced field gives the light reflected twice, M2_j; the later generations are summed as
+    /// a geometric series with the ratio r = sum M2 / sum M1 per channel, M_j = M1_j + M2_j / (1 - r).
+    void build_bounce_samples(const std::vector<SurfaceSample<F>>& surface, Rng& rng) {
+        const std::size_t n = surface.size();
+        const std::size_t stride = std::max<std::size_t>(1, (n + std::size_t(opt_.bounce_samples) - 1) /
+                                                                 std::size_t(opt_.bounce_samples));
+        std::vector<std::size_t> pick;
+        for (std::size_t i = 0; i < n; i += stride) pick.push_back(i);
+        const F area_scale = F(double(n) / double(pick.size()));
+        std::vector<SurfaceSample<F>> bs(pick.size());
+        for (std::size_t i = 0; i < pick.size(); ++i) {
+            bs[i] = surface[pick[i]];
+            bs[i].area *= area_scale;
+        }
+        (void)rng;
+        std::vector<S> M1 = gather_at_surface(bs, true, false);
+        set_bounce_sources(bs, M1);
+        if (opt_.bounce_generations >= 2) {
+            const std::vector<S> M2 = gather_at_surface(bs, false, true);
+            S s1(F(0)), s2(F(0));
+            for (std::size_t i = 0; i < bs.size(); ++i) {
+                s1 += M1[i] * bs[i].area;
+                s2 += M2[i] * bs[i].area;
+            }
+            S geo;
+            for (std::size_t c = 0; c < S::size; ++c) {
+                const F r = s1[c] > F(0) ? std::clamp(s2[c] / s1[c], F(0), F(0.9)) : F(0);
+                geo[c] = F(1) / (F(1) - r);
+                bounce_ratio_[c] = r;
+            }
+            for (std::size_t i = 0; i < bs.size(); ++i) M1[i] += opt_.bounce_series ? M2[i] * geo : M2[i];
+            set_bounce_sources(bs, M1);
+        }
+    }
+
+    /// A uniform point of the disk of area `s.area` around the surface sample in its tangent
+    /// plane, moved onto the boundary (a ray back along -n); false if the ray misses. Spreads the
+    /// light a sample carries over the patch it stands for.
+    bool jitter_on_surface(const SurfaceSample<F>& s, Vec2<F> u, Vec3<F>& p, Vec3<F>& n) const noexcept {
+        const Frame<F> fr(s.n);
+        const F a = std::sqrt(s.area * inv_pi_v<F>);
+        const F rr = a * std::sqrt(u.x), ph = F(2) * pi_v<F> * u.y;
+        const Vec3<F> q = s.p + rr * (std::cos(ph) * fr.s + std::sin(ph) * fr.t) + a * s.n;
+        F t;
+        if (!boundary_.intersect(Ray<F>(q, -s.n), t, n)) return false;
+        p = q - t * s.n;
+        return glm::dot(n, s.n) > F(0);
+    }
+
+    /// Reflected exitance M_j at each surface sample of the light gathered from inside (the
+    /// primary field and/or the bounced field).
+    std::vector<S> gather_at_surface(const std::vector<SurfaceSample<F>>& bs, bool primary, bool bounced) const {
+        std::vector<S> M(bs.size(), S(F(0)));
+        const int nr = opt_.bounce_rays;
+#if defined(_OPENMP)
+#pragma omp parallel for schedule(dynamic, 16)
+#endif
+        for (std::ptrdiff_t ii = 0; ii < std::ptrdiff_t(bs.size()); ++ii) {
+            const SurfaceSample<F>& s = bs[std::size_t(ii)];
+            Rng r = Rng::from_key(0x424f554e43ull, std::uint64_t(ii), bounced ? 2u : 1u);
+            S acc(F(0));
+            for (int k = 0; k < nr; ++k) {
+                Vec3<F> ps, ns;
+                if (!jitter_on_surface(s, r.uniform2<F>(), ps, ns)) continue;
+                const Frame<F> fk(-ns);
+                const Vec2<F> u2 = r.uniform2<F>();
+                const Vec3<F> wl = sample_cosine_hemisphere(Vec2<F>((F(k) + u2.x) / F(nr), u2.y));
+                const Vec3<F> w = glm::normalize(fk.to_world(wl));
+                const Vec3<F> o = offset_ray_origin(ps, -ns, w);
+                F te;
+                Vec3<F> ne;
+                if (!boundary_.intersect(Ray<F>(o, w), te, ne)) continue;
+                PointBasedComponents<S> c;
+                gather_segment(o, w, te, S(F(1)), r, c, opt_.bounce_k_max, primary, bounced);
+                // Light arriving along -w hits the boundary from inside at cosine wl.z.
+                acc += c.total() * fresnel_dielectric(-wl.z, eta_);
+            }
+            M[std::size_t(ii)] = acc * (pi_v<F> / F(nr));  // int L F cos d omega, cosine-sampled
+        }
+        return M;
+    }
+
+    /// Surface tree (Eq. 8: I_j = A_j M_j / pi along the inward normal) and secondary volume
+    /// samples (power A_j M_j / bounce_rays along each cosine-distributed inward ray).
+    void set_bounce_sources(const std::vector<SurfaceSample<F>>& bs, const std::vector<S>& M) {
+        std::vector<Item> items(bs.size());
+        std::vector<Item> sec;
+        const int nr = opt_.bounce_rays;
+        const F max_len = opt_.max_optical_depth / medium_.sigma_t().min_value();
+        for (std::size_t i = 0; i < bs.size(); ++i) {
+            const SurfaceSample<F>& s = bs[i];
+            Item it;
+            it.p = s.p;
+            it.d = -s.n;
+            it.w = M[i] * (s.area * inv_pi_v<F>);
+            it.extent = Aabb<F>(s.p, s.p);
+            it.id = std::uint32_t(i);
+            items[i] = it;
+            if (M[i].max_value() <= F(0) || !opt_.bounce_secondary) continue;
+            Rng r = Rng::from_key(0x5345434fu, std::uint64_t(i));
+            const S phi = M[i] * (s.area / F(nr));
+            for (int k = 0; k < nr; ++k) {
+                Vec3<F> ps, ns;
+                if (!jitter_on_surface(s, r.uniform2<F>(), ps, ns)) continue;
+                const Frame<F> fk(-ns);
+                const Vec2<F> u2 = r.uniform2<F>();
+                const Vec3<F> w = glm::normalize(fk.to_world(sample_cosine_hemisphere(Vec2<F>((F(k) + u2.x) / F(nr), u2.y))));
+                const Vec3<F> o = offset_ray_origin(ps, -ns, w);
+                F te;
+                Vec3<F> ne;
+                if (!boundary_.intersect(Ray<F>(o, w), te, ne)) continue;
+                const F len = std::min(te, max_len);
+                for (F u0 = r.uniform<F>() * step_; u0 < len; u0 += step_) {
+                    Item v;
+                    v.p = o + u0 * w;
+                    v.d = w;
+                    v.w = phi * medium_.transmittance(u0) * step_;
+                    v.extent = Aabb<F>(v.p, v.p);
+                    v.id = std::uint32_t(sec.size());
+                    sec.push_back(v);
+                }
+            }
+        }
+        bounce_area_ = F(0);
+        for (const auto& b : bs) bounce_area_ += b.area / F(bs.size());
+        surf_tree_ = Octree<F, S>(std::move(items), opt_.leaf_items);
+        sec_tree_ = sec.empty() ? Octree<F, S>() : Octree<F, S>(std::move(sec), opt_.leaf_items);
+    }
+
+    /// Fraction of a box inside the boundary (3 x 3 x 3 sub-cell centres; 1 for a box whose
+    /// centre is deeper than its half diagonal, or without a TangentPlaneBoundary). Light that
+    /// the box kernel would spread outside the medium is given to its inside part.
+    F inside_fraction(const Box& b) const noexcept {
+        if constexpr (TangentPlaneBoundary<Boundary, F>) {
+            Vec3<F> q, n;
+            boundary_tangent_plane(boundary_, b.c, q, n);
+            const F depth = glm::dot(q - b.c, n);
+            const F hd = std::sqrt(b.h1 * b.h1 + b.h2 * b.h2 + b.hd * b.hd);
+            if (depth > hd) return F(1);
+            int in = 0;
+            for (int i = -1; i <= 1; ++i)
+                for (int j = -1; j <= 1; ++j)
+                    for (int k = -1; k <= 1; ++k) {
+                        const Vec3<F> x = b.c + F(2) / F(3) * (F(i) * b.h1 * b.e1 + F(j) * b.h2 * b.e2 + F(k) * b.hd * b.d);
+                        Vec3<F> qx, nx;
+                        boundary_tangent_plane(boundary_, x, qx, nx);
+                        in += glm::dot(qx - x, nx) > F(0) ? 1 : 0;
+                    }
+            return std::max(F(in), F(1)) / F(27);
+        } else {
+            (void)b;
+            return F(1);
+        }
+    }
+
     /// Exact segment/OBB overlap [t0, t1] within [0, tmax]; false if none.
     static bool clip_box(const Box& b, const Vec3<F>& o, const Vec3<F>& w, F tmax, F& t0, F& t1) noexcept {
         t0 = F(0);
@@ -421,10 +758,16 @@ private:
 
     void gather_segment(const Vec3<F>& o, const Vec3<F>& w, F dmax, const S& weight, Rng& rng,
                         PointBasedComponents<S>& out) const noexcept {
+        gather_segment(o, w, dmax, weight, rng, out, opt_.k_max, true, true);
+    }
+    /// `primary`: single, double and multiple from the light's volume samples; `with_bounced`:
+    /// the bounced term (Eq. 8 + the secondary samples' Eqs. 6 and 7).
+    void gather_segment(const Vec3<F>& o, const Vec3<F>& w, F dmax, const S& weight, Rng& rng,
+                        PointBasedComponents<S>& out, int k_max, bool primary, bool with_bounced) const noexcept {
         const S sig_s = medium_.sigma_s();
         const S& sig_t = medium_.sigma_t();
         const Phase& ph = medium_.phase();
-        if (opt_.single) {
+        if (opt_.single && primary) {
             S acc(F(0));
             tree_.visit_segment(o, w, F(0), dmax, [&](const Item& it) {
                 const Box& b = boxes_[it.id];
@@ -438,24 +781,36 @@ private:
             });
             out.single += weight * sig_s * acc;
         }
-        if (!(opt_.double_ || (opt_.multiple && ms_))) return;
+        const bool bounced = with_bounced && !surf_tree_.items().empty();
+        const bool prim = primary && (opt_.double_ || (opt_.multiple && ms_));
+        if (!(prim || bounced)) return;
         const F sb = sigma_bar_;
         const F norm = -std::expm1(-sb * dmax);  // 1 - exp(-sigma dmax)
         if (!(norm > F(0))) return;
         const F xi = rng.uniform<F>();
-        S dsum(F(0)), msum(F(0));
-        for (int k = 0; k < opt_.k_max; ++k) {
-            const F q = (F(k) + xi) / F(opt_.k_max);
+        S dsum(F(0)), msum(F(0)), bsum(F(0));
+        for (int k = 0; k < k_max; ++k) {
+            const F q = (F(k) + xi) / F(k_max);
             const F dk = std::min(dmax, -std::log1p(-q * norm) / sb);  // Eq. 10 (jittered)
-            const F pdf = sb * std::exp(-sb * dk) / norm;
             S dbl(F(0)), mul(F(0));
-            gather_point(o + dk * w, w, dbl, mul);
-            const S wk = medium_.transmittance(dk) / (pdf * F(opt_.k_max));
+            const Vec3<F> Pk = o + dk * w;
+            if (prim) gather_point(Pk, w, dbl, mul);
+            // exp(-sigma_t,c d_k) / (k_max pdf(d_k)) with pdf = sb exp(-sb d_k) / norm, written
+            // without the two exponentials (each underflows on optically long segments).
+            S wk;
+            for (std::size_t c = 0; c < S::size; ++c)
+                wk[c] = std::exp(-(sig_t[c] - sb) * dk) * norm / (sb * F(k_max));
             dsum += wk * dbl;
             msum += wk * mul;
+            if (bounced) {
+                S b2(F(0)), b3(F(0));
+                gather_point_tree(sec_tree_, Pk, w, b2, b3, opt_.cut, 0);
+                bsum += wk * (gather_bounced(Pk, w) + b2 + b3);
+            }
         }
         out.double_ += weight * dsum;
         out.multiple += weight * msum;
+        out.bounced += weight * bsum;
     }
 
     Medium medium_;
@@ -464,7 +819,12 @@ private:
     PointBasedOptions<F> opt_;
     const MsTable<N>* ms_;
     F sigma_bar_ = F(1), step_ = F(0.1), r_min_ = F(0.1);
+    std::array<F, S::size> image_offset_{};  ///< ms_image_offset in scene units per channel
     Octree<F, S> tree_;
+    Octree<F, S> surf_tree_;
+    Octree<F, S> sec_tree_;
+    S bounce_ratio_{0};
+    F bounce_area_ = F(1);  ///< mean area of a bounce surface sample
     std::vector<Box> boxes_;
     std::vector<F> k_;
 };

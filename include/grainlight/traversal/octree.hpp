@@ -323,9 +323,10 @@ private:
         n.w = w;
         if (wsum > F(0)) {
             n.p = p / wsum;
-            const F len = glm::length(d / wsum);
+            const Vec3<F> dm = d / wsum;  // normalise the mean, not the sum (tiny weights underflow)
+            const F len = glm::length(dm);
             n.coherence = std::min(F(1), len);
-            n.d = len > F(0) ? glm::normalize(d) : Vec3<F>(F(0), F(0), F(1));
+            n.d = len > F(0) ? dm / len : Vec3<F>(F(0), F(0), F(1));
         } else {
             n.p = bounds.center();
             n.coherence = F(0);

@@ -1,0 +1,278 @@
+/// @file grainlight/integrators/ms_table.hpp
+/// The multiple-scattering table of Wang & Holzschuch 2018 (Sec. 3.5.4 and 5.2, used by Eq. 7):
+/// the record and its lookup, next to its consumer (integrators/point_based.hpp). The builder (a
+/// walk-kernel simulation), `save` and `load` live in precompute/ms_table.hpp; the members
+/// `MsTable::build`, `save` and `load` below forward to them, so include that header to build
+/// or store a table (a call without it does not compile: "no matching function build_ms_table").
+///
+/// Meaning (units of the mean free path l = 1/sigma_t, so one table serves every sigma_t): a unit
+/// of power is scattered at the origin by light travelling along +z (the phase function picks the
+/// first direction); the particles propagate in an infinite medium of albedo alpha. Every
+/// scattering event after the first collision (order >= 2 after the source, i.e. >= 3 events in
+/// all when the source is itself a scattering event: Wang18's "multiple" term; the first
+/// collision is the double-scattering term of Eq. 6) contributes to the in-scattering emission
+/// density
+///
+///     L_o(rho, z, omega) = sigma_s int p(omega', omega) L_ms(x, omega') d omega'
+///
+/// stored in 1 / (l^3 sr) per unit source power on a cylindrical grid (rho in [0, rho_max], z in
+/// [z_min, z_max], cell centres, bilinear lookup) times a direction grid (theta of omega to +z,
+/// phi of omega to the radial direction folded into [0, pi] by mirror symmetry; nearest bin or
+/// bilinear between bin centres, `DirectionLookup`).
+///
+/// Physical use (Eq. 7): a source of scattered power P_s = sigma_s Phi Delta at x_v with incoming
+/// direction d_v gives emission density P_s sigma_t^3 L_o(rho sigma_t, z sigma_t, omega) at P,
+/// with z = (P - x_v).d_v, rho = |P - x_v - z d_v|. Outside the grid: 0.
+///
+/// Value layout: index ((c n_z + iz) n_rho + ir) n_theta n_phi + it n_phi + ip.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "grainlight/core/error.hpp"
+#include "grainlight/core/math.hpp"
+#include "grainlight/core/spectrum.hpp"
+#include "grainlight/core/vector.hpp"
+
+namespace grainlight {
+
+struct MsTableOptions;
+template <class M>
+struct InfiniteMediumScene;  // precompute/ms_table.hpp
+
+/// Grid of an MsTable: cylindrical cells (rho, z) in mean free paths times direction bins.
+struct MsTableGrid {
+    std::uint32_t n_rho = 32, n_z = 64, n_theta = 16, n_phi = 8;
+    double rho_max = 8.0, z_min = -8.0, z_max = 8.0;
+    [[nodiscard]] std::size_t directions() const noexcept { return std::size_t(n_theta) * n_phi; }
+    [[nodiscard]] std::size_t cells() const noexcept { return std::size_t(n_rho) * n_z; }
+    /// Throws invalid_argument naming the first bad field.
+    void check(const char* who) const {
+        check_argument(n_rho >= 1 && n_rho <= 4096, who, "n_rho", n_rho, "[1, 4096]");
+        check_argument(n_z >= 1 && n_z <= 4096, who, "n_z", n_z, "[1, 4096]");
+        check_argument(n_theta >= 1 && n_theta <= 256, who, "n_theta", n_theta, "[1, 256]");
+        check_argument(n_phi >= 1 && n_phi <= 256, who, "n_phi", n_phi, "[1, 256]");
+        check_argument(std::isfinite(rho_max) && rho_max > 0, who, "rho_max", rho_max, "(0, inf)");
+        check_argument(std::isfinite(z_min) && std::isfinite(z_max) && z_max > z_min, who, "z_max", z_max,
+                       "(z_min, inf)");
+    }
+};
+
+/// Up to four direction bins with bilinear weights (or one bin with weight 1: nearest lookup),
+/// computed once per (source, receiver) pair and shared by all channels.
+struct MsDirection {
+    std::array<std::size_t, 4> bin{};
+    std::array<double, 4> weight{};
+    int count = 0;
+};
+
+/// The table (see the file comment). N = number of channels.
+template <std::size_t N>
+class MsTable {
+public:
+    static constexpr std::uint32_t file_version = 1;
+    /// Container kind "MSTB" (the same value as precompute/ms_table.hpp's ms_table_file_kind).
+    static constexpr std::uint32_t file_kind = std::uint32_t('M') | (std::uint32_t('S') << 8) |
+                                               (std::uint32_t('T') << 16) | (std::uint32_t('B') << 24);
+    /// Deprecated (one release): the infinite-medium walk scene is now
+    /// grainlight::InfiniteMediumScene (precompute/ms_table.hpp).
+    template <class M>
+    using InfiniteMediumScene = grainlight::InfiniteMediumScene<M>;
+
+    MsTable() = default;
+
+    /// A table from its grid and values (layout in the file comment); used by the builder and the
+    /// loader. Throws invalid_argument on a bad grid, a wrong value count, an albedo outside
+    /// [0, 1], or a negative / non-finite value.
+    MsTable(const MsTableGrid& grid, const std::array<double, N>& albedo, double mean_cosine,
+            std::uint64_t photons, std::vector<float> values)
+        : grid_(grid), g_(mean_cosine), albedo_(albedo), photons_(photons), values_(std::move(values)) {
+        grid.check("MsTable");
+        check_argument(values_.size() == N * grid.cells() * grid.directions(), "MsTable", "values.size()",
+                       values_.size(), "channels * n_rho * n_z * n_theta * n_phi");
+        check_argument(std::isfinite(g_) && g_ > -1 && g_ < 1, "MsTable", "mean_cosine", g_, "(-1, 1)");
+        for (std::size_t c = 0; c < N; ++c)
+            check_argument(albedo_[c] >= 0 && albedo_[c] <= 1, "MsTable", "albedo", albedo_[c], "[0, 1]");
+        for (float v : values_) check_argument(std::isfinite(v) && v >= 0.0f, "MsTable", "value", v, "[0, inf)");
+        inv_dr_ = grid_.n_rho / grid_.rho_max;
+        inv_dz_ = grid_.n_z / (grid_.z_max - grid_.z_min);
+    }
+
+    /// Precompute with the walk kernel (defined in precompute/ms_table.hpp; include it).
+    template <class Phase>
+    [[nodiscard]] static MsTable build(const Phase& phase, const Spectrum<N, typename Phase::Float>& albedo,
+                                       const MsTableOptions& opt) {
+        return build_ms_table<N>(phase, albedo, opt);  // ADL on Phase: found at instantiation
+    }
+    /// Save in the shared container (precompute/ms_table.hpp; include it). Throws io_error.
+    template <class Path = std::filesystem::path>
+    void save(const Path& path) const {
+        save_ms_table(*this, std::filesystem::path(path));
+    }
+    /// Load (precompute/ms_table.hpp; include it). Throws io_error / format_error.
+    template <class Path = std::filesystem::path>
+    [[nodiscard]] static MsTable load(const Path& path) {
+        return load_ms_table(std::filesystem::path(path), std::type_identity<MsTable>{});
+    }
+
+    /// Emission density L_o (1 / (l^3 sr) per unit source power) of channel c at cylindrical
+    /// coordinates (rho, z) in mean free paths, for outgoing direction with cosine `cos_theta` to
+    /// the axis and azimuth `phi` in [0, pi] to the radial direction (nearest direction bin).
+    /// 0 outside the grid.
+    [[nodiscard]] double eval(std::size_t c, double rho, double z, double cos_theta, double phi) const noexcept {
+        if (values_.empty()) return 0.0;
+        return eval_bin(c, rho, z, direction_bin(cos_theta, phi));
+    }
+    /// As eval, bilinear between direction-bin centres.
+    [[nodiscard]] double eval_interpolated(std::size_t c, double rho, double z, double cos_theta,
+                                           double phi) const noexcept {
+        if (values_.empty()) return 0.0;
+        return eval_dir(c, rho, z, direction(cos_theta, phi, true));
+    }
+
+    /// Index of the direction bin of (cos_theta, phi) (nearest bin).
+    [[nodiscard]] std::size_t direction_bin(double cos_theta, double phi) const noexcept {
+        const double theta = std::acos(std::clamp(cos_theta, -1.0, 1.0));
+        const std::size_t it =
+            std::min<std::size_t>(grid_.n_theta - 1, std::size_t(theta / pi_v<double> * grid_.n_theta));
+        const std::size_t ip = std::min<std::size_t>(
+            grid_.n_phi - 1, std::size_t(std::clamp(phi, 0.0, pi_v<double>) / pi_v<double> * grid_.n_phi));
+        return it * grid_.n_phi + ip;
+    }
+
+    /// Direction lookup: the nearest bin, or (interpolate) the four bins around (theta, phi) with
+    /// bilinear weights between bin centres (clamped at the poles and at phi = 0, pi, where the
+    /// mirror image of a bin is the bin itself).
+    [[nodiscard]] MsDirection direction(double cos_theta, double phi, bool interpolate) const noexcept {
+        MsDirection d;
+        if (!interpolate) {
+            d.bin[0] = direction_bin(cos_theta, phi);
+            d.weight[0] = 1.0;
+            d.count = 1;
+            return d;
+        }
+        const double theta = std::acos(std::clamp(cos_theta, -1.0, 1.0));
+        const double ft = theta / pi_v<double> * grid_.n_theta - 0.5;
+        const double fp = std::clamp(phi, 0.0, pi_v<double>) / pi_v<double> * grid_.n_phi - 0.5;
+        const int t0 = int(std::floor(ft)), p0 = int(std::floor(fp));
+        const double at = ft - t0, ap = fp - p0;
+        const int ta = std::max(t0, 0), tb = std::min(t0 + 1, int(grid_.n_theta) - 1);
+        const int pa = std::max(p0, 0), pb = std::min(p0 + 1, int(grid_.n_phi) - 1);
+        const int ts[2] = {ta, tb}, ps[2] = {pa, pb};
+        const double wt[2] = {1 - at, at}, wp[2] = {1 - ap, ap};
+        for (int i = 0; i < 2; ++i)
+            for (int j = 0; j < 2; ++j) {
+                d.bin[std::size_t(2 * i + j)] = std::size_t(ts[i]) * grid_.n_phi + std::size_t(ps[j]);
+                d.weight[std::size_t(2 * i + j)] = wt[i] * wp[j];
+            }
+        d.count = 4;
+        return d;
+    }
+
+    /// As eval, with the direction bin j = direction_bin(cos_theta, phi) (bilinear in rho, z).
+    [[nodiscard]] double eval_bin(std::size_t c, double rho, double z, std::size_t j) const noexcept {
+        Corners k;
+        if (!corners(rho, z, k)) return 0.0;
+        const std::size_t nd = grid_.directions();
+        const float* base = values_.data() + c * grid_.cells() * nd + j;
+        double s = 0;
+        for (int i = 0; i < 4; ++i) s += k.w[i] * double(base[k.cell[i] * nd]);
+        return s;
+    }
+
+    /// As eval_bin with a (possibly interpolated) direction lookup.
+    [[nodiscard]] double eval_dir(std::size_t c, double rho, double z, const MsDirection& d) const noexcept {
+        Corners k;
+        if (!corners(rho, z, k)) return 0.0;
+        const std::size_t nd = grid_.directions();
+        const float* base = values_.data() + c * grid_.cells() * nd;
+        double s = 0;
+        for (int i = 0; i < 4; ++i) {
+            const float* cell = base + k.cell[i] * nd;
+            double v = 0;
+            for (int j = 0; j < d.count; ++j) v += d.weight[std::size_t(j)] * double(cell[d.bin[std::size_t(j)]]);
+            s += k.w[i] * v;
+        }
+        return s;
+    }
+
+    /// Integral of L_o over the grid volume and all directions for channel c (per unit source
+    /// power): the scattered power of orders >= 2 that stays on the grid.
+    [[nodiscard]] double total(std::size_t c) const noexcept {
+        const double dr = grid_.rho_max / grid_.n_rho, dz = (grid_.z_max - grid_.z_min) / grid_.n_z;
+        double s = 0;
+        for (std::size_t iz = 0; iz < grid_.n_z; ++iz)
+            for (std::size_t ir = 0; ir < grid_.n_rho; ++ir) {
+                const double r0 = double(ir) * dr, r1 = r0 + dr;
+                const double vol = pi_v<double> * (r1 * r1 - r0 * r0) * dz;
+                for (std::size_t it = 0; it < grid_.n_theta; ++it) {
+                    const double th0 = pi_v<double> * double(it) / grid_.n_theta;
+                    const double th1 = pi_v<double> * double(it + 1) / grid_.n_theta;
+                    const double dom = 2.0 * pi_v<double> / grid_.n_phi * (std::cos(th0) - std::cos(th1));
+                    for (std::size_t ip = 0; ip < grid_.n_phi; ++ip)
+                        s += vol * dom * values_[value_index(c, iz, ir, it * grid_.n_phi + ip)];
+                }
+            }
+        return s;
+    }
+
+    /// Centre direction of bin j in the local frame (x = radial, z = axis); `mirror` flips phi.
+    [[nodiscard]] Vec3<double> bin_direction(std::size_t j, bool mirror) const noexcept {
+        const double th = pi_v<double> * (double(j / grid_.n_phi) + 0.5) / grid_.n_theta;
+        const double ph = pi_v<double> * (double(j % grid_.n_phi) + 0.5) / grid_.n_phi * (mirror ? -1.0 : 1.0);
+        return {std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)};
+    }
+    [[nodiscard]] std::size_t value_index(std::size_t c, std::size_t iz, std::size_t ir, std::size_t j) const noexcept {
+        return ((c * grid_.n_z + iz) * grid_.n_rho + ir) * grid_.directions() + j;
+    }
+
+    [[nodiscard]] const MsTableGrid& grid() const noexcept { return grid_; }
+    [[nodiscard]] double albedo(std::size_t c) const noexcept { return albedo_[c]; }
+    [[nodiscard]] const std::array<double, N>& albedos() const noexcept { return albedo_; }
+    [[nodiscard]] double mean_cosine() const noexcept { return g_; }
+    [[nodiscard]] std::uint64_t photons() const noexcept { return photons_; }
+    [[nodiscard]] std::size_t size() const noexcept { return values_.size(); }
+    [[nodiscard]] bool empty() const noexcept { return values_.empty(); }
+    [[nodiscard]] const std::vector<float>& values() const noexcept { return values_; }
+    [[nodiscard]] std::size_t bytes() const noexcept { return values_.size() * sizeof(float); }
+
+private:
+    struct Corners {
+        std::size_t cell[4];
+        double w[4];
+    };
+    bool corners(double rho, double z, Corners& k) const noexcept {
+        if (values_.empty() || !(rho >= 0) || rho > grid_.rho_max || z < grid_.z_min || z > grid_.z_max) return false;
+        const double fr = rho * inv_dr_ - 0.5, fz = (z - grid_.z_min) * inv_dz_ - 0.5;
+        const int r0 = int(std::floor(fr)), z0 = int(std::floor(fz));
+        const double ar = fr - r0, az = fz - z0;
+        const int ra = std::max(r0, 0), rb = std::min(r0 + 1, int(grid_.n_rho) - 1);
+        const int za = std::max(z0, 0), zb = std::min(z0 + 1, int(grid_.n_z) - 1);
+        const std::size_t nr = grid_.n_rho;
+        k.cell[0] = std::size_t(za) * nr + std::size_t(ra);
+        k.cell[1] = std::size_t(za) * nr + std::size_t(rb);
+        k.cell[2] = std::size_t(zb) * nr + std::size_t(ra);
+        k.cell[3] = std::size_t(zb) * nr + std::size_t(rb);
+        k.w[0] = (1 - az) * (1 - ar);
+        k.w[1] = (1 - az) * ar;
+        k.w[2] = az * (1 - ar);
+        k.w[3] = az * ar;
+        return true;
+    }
+
+    MsTableGrid grid_{};
+    double g_ = 0;
+    std::array<double, N> albedo_{};
+    std::uint64_t photons_ = 0;
+    std::vector<float> values_;
+    double inv_dr_ = 1, inv_dz_ = 1;
+};
+
+}  // namespace grainlight
