@@ -410,6 +410,54 @@ private:
     double sigma_t_ = 0, sigma_s_ = 0;
 };
 
+/// Homogeneous grey medium with forced collisions (the paired continuous medium of Guo21
+/// Sec. 6.3, sampled like DiscreteParticleMedium so that thin media are not left to analog
+/// free flights): over a segment of length t_max, P = 1 - e^{-sigma_t t_max}; a collision is
+/// forced with probability q = max(P, q_min) at a distance from the exponential truncated to
+/// [0, t_max], weight (P / q) albedo; otherwise escape with weight (1 - P) / (1 - q). Unbiased for
+/// the RTE; NEE through phase() (a PhaseMedium).
+template <class Phase>
+class ForcedCollisionMedium {
+public:
+    using Float = typename Phase::Float;
+    using F = Float;
+    using Spectrum = grainlight::Spectrum<1, F>;
+    using S = Spectrum;
+
+    ForcedCollisionMedium(F sigma_t, F albedo, Phase phase, F q_min = F(0.5))
+        : sigma_t_(sigma_t), albedo_(albedo), q_min_(q_min), phase_(std::move(phase)) {
+        check_argument(std::isfinite(sigma_t) && sigma_t >= F(0), "ForcedCollisionMedium", "sigma_t", sigma_t, "[0, inf)");
+        check_argument(albedo >= F(0) && albedo <= F(1), "ForcedCollisionMedium", "albedo", albedo, "[0, 1]");
+        check_argument(q_min >= F(0) && q_min < F(1), "ForcedCollisionMedium", "q_min", q_min, "[0, 1)");
+    }
+    [[nodiscard]] const Phase& phase() const noexcept { return phase_; }
+    [[nodiscard]] F sigma_t() const noexcept { return sigma_t_; }
+    [[nodiscard]] S transmittance(const Ray<F>&, F t, Rng&) const noexcept { return S(std::exp(-sigma_t_ * t)); }
+    [[nodiscard]] Interaction<F, S> sample_interaction(const Ray<F>& ray, F t_max, Rng& rng) const noexcept {
+        Interaction<F, S> it;
+        const F P = std::isinf(t_max) ? (sigma_t_ > F(0) ? F(1) : F(0)) : -std::expm1(-sigma_t_ * t_max);
+        const F q = P > F(0) ? std::max(P, q_min_) : F(0);
+        if (!(rng.uniform<F>() < q)) {
+            it.kind = EventKind::escape;
+            it.t = t_max;
+            it.p = ray(t_max);
+            it.weight = S(q > F(0) ? (F(1) - P) / (F(1) - q) : F(1));
+            return it;
+        }
+        const F t = std::min(-std::log1p(-rng.uniform<F>() * P) / sigma_t_, t_max);
+        it.kind = EventKind::scatter;
+        it.t = t;
+        it.p = ray(t);
+        it.nee = NeeKind::phase;
+        it.weight = S(P / q * albedo_);
+        return it;
+    }
+
+private:
+    F sigma_t_, albedo_, q_min_;
+    Phase phase_;
+};
+
 /// The cloud as explicit smooth dielectric spheres of relative index eta (Guo21's EPT).
 template <std::floating_point F = float>
 class ExplicitSphereMedium {
