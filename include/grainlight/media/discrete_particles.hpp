@@ -251,18 +251,22 @@ public:
         return -1;
     }
 
-    /// Optical depth sum_{members, 0 < s <= t} C_t,i / A of the query cylinder along ray.
-    [[nodiscard]] F optical_depth(const Ray<F>& ray, F t) const noexcept {
+    /// Optical depth sum_{members, 0 < s <= t} C_t,i / A of the query cylinder along ray; the
+    /// gather stops once the sum exceeds tau_cap (then any value > tau_cap is returned).
+    [[nodiscard]] F optical_depth(const Ray<F>& ray, F t, F tau_cap = std::numeric_limits<F>::infinity()) const noexcept {
         F tau = 0;
         grid_->for_each_in_cylinder(Vec3<float>(ray.o), Vec3<float>(ray.d), 0.0f, float(t), float(r_c_),
                                     [&](std::uint32_t i, float, float) {
                                         tau += extinction_cross_section(i) * inv_area_;
-                                        return true;
+                                        return !(tau > tau_cap);
                                     });
         return tau;
     }
     /// T_A (Eqs. 18-19); deterministic (rng unused).
-    [[nodiscard]] S transmittance(const Ray<F>& ray, F t, Rng&) const noexcept { return S(std::exp(-optical_depth(ray, t))); }
+    [[nodiscard]] S transmittance(const Ray<F>& ray, F t, Rng&) const noexcept {
+        const F tau = optical_depth(ray, t, F(40));
+        return S(tau > F(40) ? F(0) : std::exp(-tau));
+    }
 
     /// Eq. 24 over the query sphere of radius r_c (membership: centre within r_i + r_c of y;
     /// measure mu_i = 4/3 pi (r_i + r_c)^3): Q(y; w_in -> w_out) [1/scene unit/sr]; 0 for an empty
@@ -282,8 +286,9 @@ public:
     /// A free flight (see the file comment).
     [[nodiscard]] Interaction<F, S> sample_interaction(const Ray<F>& ray, F t_max, Rng& rng) const noexcept {
         Interaction<F, S> it;
-        const F tau = optical_depth(ray, t_max);
-        const F P = -std::expm1(-tau);
+        // P = 1 - e^{-tau}; beyond tau = 40 it is 1 in float and the gather stops early.
+        const F tau = optical_depth(ray, t_max, F(40));
+        const F P = tau > F(40) ? F(1) : -std::expm1(-tau);
         const F q = P > F(0) ? std::max(P, F(st_.forced_collision)) : F(0);
         const F u = rng.uniform<F>();
         if (!(u < q)) {
