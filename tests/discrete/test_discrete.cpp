@@ -452,3 +452,44 @@ TEST_CASE("explicit spheres: exact hits through the grid agree with brute force"
     CHECK(agree == n);
     CHECK(hits > n / 10);
 }
+
+TEST_CASE("mixtures and absorbing particles: per-species optics, bulk sigma_t = number-weighted sum", "[discrete][mixture]") {
+    // Two species: ice r = 5 um (m = 1.31) and absorbing dust r = 20 um (m = 1.5 + 0.01 i), 1:3.
+    const gl::BoxBoundary box(Vec3d(0.0), Vec3d(1000.0));
+    auto cloud = std::make_shared<gl::ParticleCloud>(gl::ParticleCloud::generate(
+        box, 4000, {gl::cloud_species(gl::MonodispersePsd(5), 1.0), gl::cloud_species(gl::MonodispersePsd(20), 3.0)}, 4, 1.0));
+    gl::ParticleGridSettings gs;
+    gs.dilation = 10;
+    auto grid = std::make_shared<gl::ParticleGrid>(*cloud, gs);
+    gl::ParticleModel ice, dust;
+    ice.particle_index = {1.31, 0.0};
+    dust.particle_index = {1.5, 0.01};
+    gl::DiscreteMediumSettings ms;
+    ms.query_radius = 10;
+    ms.theta_nodes_tail = 200;
+    const Medium m(grid, {ice, dust}, ms);
+    const auto ci = gl::SingleParticle(5, 0.55, ice).cross_sections();
+    const auto cd = gl::SingleParticle(20, 0.55, dust).cross_sections();
+    const double V = 1e9;
+    CHECK(m.global_sigma_t() == Approx((1000 * ci.C_t + 3000 * cd.C_t) / V).epsilon(1e-6));
+    CHECK(m.global_sigma_s() == Approx((1000 * ci.C_s + 3000 * cd.C_s) / V).epsilon(1e-6));
+    CHECK(m.albedo(0) == Approx(1.0f));
+    CHECK(m.albedo(3999) == Approx(cd.C_s / cd.C_t).epsilon(1e-5));
+    CHECK(m.albedo(3999) < 0.9f);  // Eq. 13 / App. C absorption
+    // An absorbing member's collision weight carries its albedo (analog collisions here).
+    gl::Rng rng = gl::Rng::from_key(1);
+    const auto& p = (*cloud)[3999];
+    const gl::Ray<float> r(p.center() - Vec3f(0, 0, 1), Vec3f(0, 0, 1));
+    bool seen = false;
+    for (int k = 0; k < 200 && !seen; ++k) {
+        const auto it = m.sample_interaction(r, 2.0f, rng);
+        if (it.is_scatter() && it.p == p.center()) {
+            seen = true;
+            const float P = 1.0f - m.transmittance(r, 2.0f, rng)[0];
+            CHECK(it.weight[0] == Approx(P / std::max(P, 0.5f) * m.albedo(3999)).epsilon(1e-4));
+        }
+    }
+    CHECK(seen);
+    // The scattering particle is found at its vertex and excluded from the next segment.
+    CHECK(m.particle_at(p.center()) == 3999);
+}
