@@ -1,4 +1,4 @@
-// guo21_fig14_convergence: Guo21 Fig. 14 / Sec. 6.3. Monodisperse ice particles (r = 20 um,
+// guo21_fig14_convergence: Guo21 Fig. 14 / Sec. 6.3. Monodisperse ice particles (r = 10 um,
 // m = 1.31, lambda = 0.55 um) uniformly in a 0.4 m cube (the paper's DRAGON is a mesh we do not
 // have: a cube stands in), N = 1e4 .. 1e6 (quick) or 1e7 (full), rendered as a discrete medium
 // (media/discrete_particles.hpp, integrators/discrete_vpt.hpp) beside its paired continuous medium
@@ -9,7 +9,7 @@
 //   guo21_fig14_convergence [--quality quick|full] [--out DIR] [--seed S] [--threads N]
 //                           [--spp N] [--width W] [--counts 1e4,1e5,...] [--query-radius-mm R]
 //
-// The query radius is r_c = 4 mm (r_c / r_p = 200; the equivalent k of Eq. 23 is printed): the
+// The query radius is r_c = 2 mm (r_c / r_p = 200; the equivalent k of Eq. 23 is printed): the
 // membership rule's mean-extinction factor (1 + r_p/r_c)^2 (1 - e^-c)/c, c = C_t / (pi r_c^2), is
 // printed (1.010). Last stdout line: JSON with N, mean_discrete, mean_continuous, rel_diff
 // (mean_discrete / mean_continuous - 1), rel_rmse (RMS over pixels of discrete - continuous,
@@ -69,10 +69,10 @@ int main(int argc, char** argv) {
         gl_examples::Cli cli(argc, argv, "guo21_fig14_convergence",
                              "Guo21 Fig. 14: discrete media converge to their paired continuous media as N grows");
         cli.common_options("out/guo21_fig14_convergence")
-            .option("spp", "samples per pixel (default 24 quick, 64 full)")
+            .option("spp", "samples per pixel (default 48 quick, 64 full)")
             .option("width", "image width (default 80 quick, 512 full); height = 3/4 width")
             .option("counts", "particle counts (default 1e4,1e5,1e6 quick; 1e4,1e5,1e6,1e7 full)")
-            .option("query-radius-mm", "query-cylinder radius r_c [mm]", "4");
+            .option("query-radius-mm", "query-cylinder radius r_c [mm]", "2");
         cli.finish();
         const bool full = cli.full_quality();
         const auto out = cli.out_dir("out/guo21_fig14_convergence");
@@ -80,16 +80,16 @@ int main(int argc, char** argv) {
         const int width = int(cli.integer("width", full ? 512 : 80));
         if (width < 8 || width > 8192) throw gl_examples::cli_error("--width must be in [8, 8192]");
         const int height = width * 3 / 4;
-        const int spp = int(cli.integer("spp", full ? 64 : 24));
+        const int spp = int(cli.integer("spp", full ? 64 : 48));
         if (spp < 1 || spp > 65536) throw gl_examples::cli_error("--spp must be in [1, 65536]");
         const std::vector<double> counts = cli.list("counts", full ? std::vector<double>{1e4, 1e5, 1e6, 1e7}
                                                                    : std::vector<double>{1e4, 1e5, 1e6});
         for (double c : counts)
             if (!(c >= 1 && c < 4e9)) throw gl_examples::cli_error("--counts values must be in [1, 4e9)");
-        const double r_c = cli.num("query-radius-mm", 4.0) * 1e-3;
+        const double r_c = cli.num("query-radius-mm", 2.0) * 1e-3;
         if (!(r_c > 0 && r_c < 0.1)) throw gl_examples::cli_error("--query-radius-mm must be in (0, 100)");
         const int continuous_spp_factor = 4;
-        const double r_um = 20.0, lambda = 0.55, side = 0.4, volume = side * side * side;
+        const double r_um = 10.0, lambda = 0.55, side = 0.4, volume = side * side * side;
         gl::ParticleModel model;
         model.particle_index = {1.31, 0.0};
 
