@@ -5,6 +5,5 @@
 
 #include "grainlight/media/concepts.hpp"
 #include "grainlight/media/continuous.hpp"
-#include "grainlight/media/discrete_particles.hpp"
 #include "grainlight/media/shell.hpp"
 #include "grainlight/media/teleportation.hpp"
