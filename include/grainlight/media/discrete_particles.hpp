@@ -286,8 +286,36 @@ public:
     /// A free flight (see the file comment).
     [[nodiscard]] Interaction<F, S> sample_interaction(const Ray<F>& ray, F t_max, Rng& rng) const noexcept {
         Interaction<F, S> it;
-        // P = 1 - e^{-tau}; beyond tau = 40 it is 1 in float and the gather stops early.
-        const F tau = optical_depth(ray, t_max, F(40));
+        // Pass 1: tau of the segment (P = 1 - e^{-tau}; beyond tau = 40 it is 1 in float and the
+        // gather stops after the current voxel), keeping up to kBuffer members so that pass 2 is
+        // not needed when they are all (sparse or opaque members).
+        constexpr int kBuffer = 16;
+        std::uint32_t buf_i[kBuffer];
+        float buf_s[kBuffer];
+        int nbuf = 0;
+        bool overflow = false;
+        F tau = 0;
+        {
+            const Vec3<float> o(ray.o), d(ray.d);
+            const float rc = float(r_c_), tm = float(t_max);
+            const CloudParticle* ps = cloud().particles().data();
+            grid_->walk_voxels(o, d, 0.0f, tm, [&](std::span<const std::uint32_t> refs, float te, float tx) {
+                for (const std::uint32_t i : refs) {
+                    float s, b2;
+                    if (!ParticleGrid::cylinder_member(ps[i], o, d, rc, s, b2)) continue;
+                    if (!(s > 0.0f && s <= tm && s >= te && s < tx)) continue;
+                    tau += extinction_cross_section(i) * inv_area_;
+                    if (nbuf < kBuffer) {
+                        buf_i[nbuf] = i;
+                        buf_s[nbuf] = s;
+                        ++nbuf;
+                    } else {
+                        overflow = true;
+                    }
+                }
+                return !(tau > F(40));
+            });
+        }
         const F P = tau > F(40) ? F(1) : -std::expm1(-tau);
         const F q = P > F(0) ? std::max(P, F(st_.forced_collision)) : F(0);
         const F u = rng.uniform<F>();
@@ -301,7 +329,23 @@ public:
         const F tau_star = -std::log1p(-std::min(rng.uniform<F>() * P, F(1) - F(1e-7)));
         std::int64_t chosen = -1;
         float s_chosen = 0;
-        choose_member(ray, t_max, tau_star, chosen, s_chosen);
+        if (!overflow) {
+            // Order the buffered members by (s, index) (insertion sort) and invert the cumulative tau.
+            for (int a = 1; a < nbuf; ++a)
+                for (int b = a; b > 0 && (buf_s[b] < buf_s[b - 1] || (buf_s[b] == buf_s[b - 1] && buf_i[b] < buf_i[b - 1])); --b) {
+                    std::swap(buf_s[b], buf_s[b - 1]);
+                    std::swap(buf_i[b], buf_i[b - 1]);
+                }
+            F acc = 0;
+            for (int a = 0; a < nbuf; ++a) {
+                acc += extinction_cross_section(buf_i[a]) * inv_area_;
+                chosen = buf_i[a];
+                s_chosen = buf_s[a];
+                if (acc >= tau_star) break;
+            }
+        } else {
+            choose_member(ray, t_max, tau_star, chosen, s_chosen);
+        }
         if (chosen < 0) {  // round-off: no member reached tau*; treat as escape of this sample
             it.kind = EventKind::escape;
             it.t = t_max;
