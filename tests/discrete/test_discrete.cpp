@@ -493,3 +493,34 @@ TEST_CASE("mixtures and absorbing particles: per-species optics, bulk sigma_t = 
     // The scattering particle is found at its vertex and excluded from the next segment.
     CHECK(m.particle_at(p.center()) == 3999);
 }
+
+TEST_CASE("-FD is ray optics: C_t = pi r^2 and no Fraunhofer peak", "[discrete][fd]") {
+    // r = 200 um ice at 0.55 um (x = 2285): with diffraction C_t ~ 2 pi r^2 (extinction paradox)
+    // and a forward peak of width ~1/x; without, C_t = pi r^2 exactly and f(0) is ray optics only.
+    const gl::BoxBoundary box(Vec3d(0.0), Vec3d(1.0));
+    auto cloud = std::make_shared<gl::ParticleCloud>(
+        gl::ParticleCloud::generate(box, 10, {gl::cloud_species(gl::MonodispersePsd(200))}, 1, 1e6));
+    gl::ParticleGridSettings gs;
+    gs.dilation = 1e-3;
+    auto grid = std::make_shared<gl::ParticleGrid>(*cloud, gs);
+    gl::ParticleModel ice;
+    ice.particle_index = {1.31, 0.0};
+    gl::DiscreteMediumSettings ms;
+    ms.query_radius = 1e-3;
+    ms.theta_nodes_tail = 300;
+    const Medium with(grid, {ice}, ms);
+    ms.diffraction = false;
+    const Medium without(grid, {ice}, ms);
+    const double geo = gl::pi_v<double> * 200e-6 * 200e-6;
+    CHECK(double(without.extinction_cross_section(0)) / geo == Approx(1.0).epsilon(1e-5));
+    CHECK(with.extinction_cross_section(0) / geo == Approx(2.0).epsilon(0.02));
+    CHECK(without.albedo(0) == Approx(1.0f));
+    const Vec3f z(0, 0, 1);
+    const double f0_with = with.phase_eval(0, z, z).value[0], f0_without = without.phase_eval(0, z, z).value[0];
+    INFO("f(0) with " << f0_with << " without " << f0_without);
+    CHECK(f0_with > 1000 * f0_without);
+    // Away from the peak (30 deg) the ray-optics part carries twice the share without diffraction.
+    const Vec3f w30(0.5f, 0.0f, float(std::sqrt(0.75)));
+    const double r30 = without.phase_eval(0, z, w30).value[0] / with.phase_eval(0, z, w30).value[0];
+    CHECK(r30 == Approx(2.0).epsilon(0.15));
+}
