@@ -7,6 +7,7 @@
 #include "grainlight/packing/chord_lengths.hpp"
 #include "grainlight/packing/md_packer.hpp"
 #include "grainlight/packing/packing_library.hpp"
+#include "grainlight/packing/particle_cloud.hpp"
 #include "grainlight/packing/periodic_tile.hpp"
 #include "grainlight/packing/poisson.hpp"
 #include "grainlight/core/serialization.hpp"

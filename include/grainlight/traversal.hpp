@@ -6,4 +6,5 @@
 
 #include "grainlight/traversal/aggregate.hpp"
 #include "grainlight/traversal/dda.hpp"
+#include "grainlight/traversal/particle_grid.hpp"
 #include "grainlight/traversal/tiled_packing.hpp"

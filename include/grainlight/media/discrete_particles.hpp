@@ -1,0 +1,620 @@
+/// @file grainlight/media/discrete_particles.hpp
+/// Discrete participating media (Guo21 Secs. 4.2 and 5): a cloud of individually placed spheres
+/// (packing/particle_cloud.hpp) gathered along "fat rays" through a particle grid
+/// (traversal/particle_grid.hpp), with cross sections and phase functions of every particle
+/// from the optics layer (optics/particle.hpp's Mie/GOA choice, cached per radius bin and
+/// species at one wavelength). Also the explicit-sphere medium used as Guo21's EPT reference.
+///
+/// DiscreteParticleMedium (models Medium). Membership and measures (docs/guo21.md derives them):
+///  - query cylinder around a ray, radius r_c, cross section A = pi r_c^2 (Eq. 23 read as a
+///    length: S_A = k S_pix z_med / z_near is the cylinder's diameter, r_c = S_A / 2);
+///    particle i is a member iff its centre lies within r_i + r_c of the axis (Sec. 5.3), and it
+///    sits on the axis at s_i = (p_i - o) . d, the axis point nearest to its centre;
+///  - T_A(x, x + t d) = exp(-sum_{members, 0 < s_i <= t} C_t,i / A) (Eqs. 18-19);
+///  - a member removes the fraction 1 - exp(-C_t,i / A) of the fat ray's radiance; of that,
+///    C_s,i / C_t,i is scattered with the particle's own phase function f_i (Eq. 24 with the
+///    query region shrunk to the cylinder slice holding particle i, so that the scattering density
+///    equals the extinction density times the albedo: energy is conserved per realization);
+///    the scattering vertex is the particle's centre, and the particle that scattered is not a
+///    member of the next segment (s = 0 there; members need s > 0);
+///  - Eq. 24 over a query sphere, Q(y, theta) = sum_{|p_i - y| < r_i + r_c} C_s,i f_i(theta) / mu_i
+///    with mu_i = 4/3 pi (r_i + r_c)^3, is `query_sphere_q`: its placement average is exactly
+///    N_0 <C_s f> (Eq. 17 times sigma_s).
+/// Averaged over Poisson placements, E[T_A] = exp(-n pi (r_p + r_c)^2 L (1 - e^{-c})), c = C_t / A,
+/// i.e. the mean extinction is n C_t times (1 + r_p / r_c)^2 (1 - e^{-c}) / c
+/// (`membership_extinction_factor`): -> 1 for r_c >> r_p (Beer-Lambert), and
+/// (1 + r_c / r_p)^2 times the geometric cross section for opaque particles (r_c << r_p).
+///
+/// Free flights (sample_interaction): the segment's members are gathered once for their total
+/// optical depth tau; with P = 1 - e^{-tau} a collision is forced with probability
+/// q = max(P, q_min) (q_min = `forced_collision`, default 0.5), the member is chosen in order
+/// along the ray by inverting the cumulative 1 - e^{-sum tau_i} (a second gather), and the event
+/// weight is (P / q) C_s,i / C_t,i; otherwise the path reaches t_max with weight (1 - P) / (1 - q).
+/// Unbiased for the discrete transport above (docs/guo21.md); the direction is sampled from the
+/// member's phase table (has_direction: the medium chooses it; integrators/discrete_vpt.hpp does
+/// NEE with `phase_eval(particle_at(p), ...)`). -FD (`diffraction = false`): amplitudes without
+/// the Fraunhofer term and C_t = pi r^2 (ray optics exactly; GOA particles only: Mie particles,
+/// r below the switch radius, keep their exact optics).
+///
+/// ExplicitSphereMedium (models Medium): the same cloud as explicit smooth dielectric spheres
+/// (exact ray-sphere hits through the grid, Fresnel reflection/refraction by optics/fresnel.hpp
+/// chosen with probability F): Guo21's EPT reference. Overlapping spheres are not resolved (a path
+/// inside sphere i sees only sphere i).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "grainlight/core/error.hpp"
+#include "grainlight/core/math.hpp"
+#include "grainlight/core/ray.hpp"
+#include "grainlight/core/rng.hpp"
+#include "grainlight/core/spectrum.hpp"
+#include "grainlight/media/concepts.hpp"
+#include "grainlight/optics/bulk.hpp"
+#include "grainlight/optics/fresnel.hpp"
+#include "grainlight/optics/goa.hpp"
+#include "grainlight/optics/lorenz_mie.hpp"
+#include "grainlight/optics/particle.hpp"
+#include "grainlight/phase/mie.hpp"
+#include "grainlight/traversal/particle_grid.hpp"
+
+namespace grainlight {
+
+/// Query-cylinder radius from Guo21 Eq. 23 read as a length: S_A = k S_pix z_med / z_near is the
+/// diameter of the cross section, r_c = S_A / 2. S_pix is the pixel's side on the near plane at
+/// z_near (for a pinhole camera S_pix / z_near = its pixel spread angle).
+[[nodiscard]] inline double query_radius_eq23(double k, double pixel_size, double z_near, double z_med) {
+    const char* who = "query_radius_eq23";
+    check_argument(std::isfinite(k) && k > 0, who, "k", k, "> 0 (finite)");
+    check_argument(std::isfinite(pixel_size) && pixel_size > 0, who, "pixel_size", pixel_size, "> 0 (finite)");
+    check_argument(std::isfinite(z_near) && z_near > 0, who, "z_near", z_near, "> 0 (finite)");
+    check_argument(std::isfinite(z_med) && z_med > 0, who, "z_med", z_med, "> 0 (finite)");
+    return 0.5 * k * pixel_size * z_med / z_near;
+}
+
+/// Mean-extinction factor of the membership rule (centres within r_p + r_c, A = pi r_c^2) for a
+/// Poisson cloud of particles of radius r_p and extinction cross section C_t (same units):
+/// (1 + r_p / r_c)^2 (1 - e^{-c}) / c with c = C_t / (pi r_c^2).
+[[nodiscard]] inline double membership_extinction_factor(double r_p, double r_c, double C_t) {
+    const double c = C_t / (pi_v<double> * r_c * r_c);
+    const double g = c > 1e-8 ? -std::expm1(-c) / c : 1.0 - 0.5 * c;
+    return (1 + r_p / r_c) * (1 + r_p / r_c) * g;
+}
+
+struct DiscreteMediumSettings {
+    double wavelength_um = 0.55;  ///< vacuum wavelength of the (grey) channel
+    double query_radius = 0;      ///< r_c [scene units], > 0 and <= the grid's dilation
+    bool diffraction = true;      ///< false: Guo21's "-FD" (ray optics exactly)
+    int radius_bins = 24;         ///< log-spaced bins per polydisperse species
+    double forced_collision = 0.5;  ///< q_min in [0, 1): 0 = analog collisions
+    std::size_t theta_nodes_tail = 600;  ///< phase-table angles beyond the forward peak
+};
+
+/// Optics of one radius bin.
+template <std::floating_point F>
+struct ParticleBinOptics {
+    double r_rep_um = 0;          ///< radius the optics were computed at
+    double C_t_um2 = 0, C_s_um2 = 0, C_a_um2 = 0;
+    MiePhase<F, Spectrum<1, F>> phase;
+};
+
+/// Optics of one particle of radius r_um at one wavelength: C_t, C_s, C_a [um^2] and the
+/// intensities |S1|^2 + |S2|^2 on theta. diffraction = false: "-FD" (GOA without the Fraunhofer
+/// term, C_t = pi r^2); Mie particles are unchanged.
+inline void particle_optics(const ParticleModel& model, double r_um, double lambda_um, bool diffraction,
+                            std::span<const double> theta, double& C_t, double& C_s, std::vector<double>& intensity) {
+    const double k = 2 * pi_v<double> * model.host_index / lambda_um, x = k * r_um, geo = pi_v<double> * r_um * r_um;
+    const auto m = model.relative_index();
+    intensity.assign(theta.size(), 0.0);
+    if (model.method_at(r_um) == ScatteringMethod::mie) {
+        const LorenzMie mie(m, x);
+        const auto q = mie.efficiencies();
+        C_t = q.qext * geo;
+        C_s = q.qsca * geo;
+        for (std::size_t i = 0; i < theta.size(); ++i) {
+            const double mu = i == 0 ? 1.0 : (theta[i] >= pi_v<double> ? -1.0 : std::cos(theta[i]));
+            const auto s = mie.amplitudes(mu);
+            intensity[i] = std::norm(s.S1) + std::norm(s.S2);
+        }
+        return;
+    }
+    const Goa goa(m, x, model.p_max);
+    const GoaTable table(m, model.p_max, theta);
+    table.intensities(x, intensity, diffraction);
+    const double C_a = goa.qabs() * geo;
+    C_t = diffraction ? goa.qext() * geo : geo;
+    C_s = std::max(0.0, C_t - C_a);
+}
+
+template <std::floating_point F = float>
+class DiscreteParticleMedium {
+public:
+    using Float = F;
+    using Spectrum = grainlight::Spectrum<1, F>;
+    using S = Spectrum;
+    using Bin = ParticleBinOptics<F>;
+
+    /// `models`: one ParticleModel per species of the grid's cloud (or one for all).
+    DiscreteParticleMedium(std::shared_ptr<const ParticleGrid> grid, std::vector<ParticleModel> models,
+                           const DiscreteMediumSettings& st)
+        : grid_(std::move(grid)), st_(st) {
+        const char* who = "DiscreteParticleMedium";
+        check_argument(bool(grid_), who, "grid", "null", "a particle grid");
+        const ParticleCloud& cloud = grid_->cloud();
+        check_argument(cloud.size() >= 1, who, "cloud.size()", cloud.size(), ">= 1");
+        check_argument(std::isfinite(st.query_radius) && st.query_radius > 0, who, "query_radius", st.query_radius,
+                       "> 0 (finite; from k > 0 in Eq. 23)");
+        check_argument(st.query_radius <= double(grid_->dilation()) * (1 + 1e-6), who, "query_radius", st.query_radius,
+                       "<= the grid's dilation " + std::to_string(grid_->dilation()));
+        check_argument(std::isfinite(st.wavelength_um) && st.wavelength_um > 0, who, "wavelength_um", st.wavelength_um,
+                       "> 0 (finite)");
+        check_argument(st.radius_bins >= 1 && st.radius_bins <= 4096, who, "radius_bins", st.radius_bins, "[1, 4096]");
+        check_argument(st.forced_collision >= 0 && st.forced_collision < 1, who, "forced_collision", st.forced_collision,
+                       "[0, 1)");
+        const std::size_t ns = cloud.species_count();
+        check_argument(models.size() == ns || models.size() == 1, who, "models.size()", models.size(),
+                       "1 or the number of species " + std::to_string(ns));
+        for (auto& m : models) m.validate();
+        if (models.size() == 1 && ns > 1) models.assign(ns, models[0]);
+        models_ = models;
+        r_c_ = F(st.query_radius);
+        inv_area_ = F(1.0 / (pi_v<double> * st.query_radius * st.query_radius));
+        const double u2 = cloud.um_per_unit() * cloud.um_per_unit();
+
+        species_.resize(ns);
+        double sum_ct = 0, sum_cs = 0;
+        for (std::size_t s = 0; s < ns; ++s) {
+            SpeciesBins& sb = species_[s];
+            double rmin = std::numeric_limits<double>::infinity(), rmax = 0;
+            for (std::uint32_t i = cloud.species_begin(s); i < cloud.species_begin(s + 1); ++i) {
+                rmin = std::min(rmin, double(cloud[i].r));
+                rmax = std::max(rmax, double(cloud[i].r));
+            }
+            if (!(rmax > 0)) continue;
+            const int nb = rmax > rmin * (1 + 1e-6) ? st.radius_bins : 1;
+            sb.log_rmin = std::log(rmin);
+            sb.inv_dlog = nb > 1 ? double(nb) / (std::log(rmax) - std::log(rmin)) : 0.0;
+            const double x_max = 2 * pi_v<double> * models_[s].host_index * rmax * cloud.um_per_unit() / st.wavelength_um;
+            const std::vector<double> theta = forward_peaked_theta_grid(x_max, 400, st.theta_nodes_tail);
+            std::vector<double> inten;
+            for (int b = 0; b < nb; ++b) {
+                const double r_rep = nb == 1 ? rmin : std::exp(sb.log_rmin + (b + 0.5) / sb.inv_dlog);
+                Bin bin;
+                bin.r_rep_um = r_rep * cloud.um_per_unit();
+                particle_optics(models_[s], bin.r_rep_um, st.wavelength_um, st.diffraction, theta, bin.C_t_um2, bin.C_s_um2,
+                                inten);
+                bin.C_a_um2 = bin.C_t_um2 - bin.C_s_um2;
+                std::vector<S> v(theta.size());
+                for (std::size_t i = 0; i < theta.size(); ++i) v[i] = S(F(inten[i]));
+                bin.phase = MiePhase<F, S>::from_intensities(theta, v);
+                sb.bins.push_back(std::move(bin));
+                // Per-bin constants in scene units: C(r) = C(r_rep) (r / r_rep)^2.
+                const double rr = r_rep;
+                sb.ct_over_r2.push_back(F(sb.bins.back().C_t_um2 / u2 / (rr * rr)));
+                sb.albedo.push_back(F(sb.bins.back().C_t_um2 > 0 ? sb.bins.back().C_s_um2 / sb.bins.back().C_t_um2 : 0.0));
+            }
+            for (std::uint32_t i = cloud.species_begin(s); i < cloud.species_begin(s + 1); ++i) {
+                const int b = sb.bin_of(cloud[i].r);
+                const double ct = double(sb.ct_over_r2[std::size_t(b)]) * double(cloud[i].r) * double(cloud[i].r);
+                sum_ct += ct;
+                sum_cs += ct * double(sb.albedo[std::size_t(b)]);
+            }
+        }
+        sigma_t_ = sum_ct / cloud.volume();
+        sigma_s_ = sum_cs / cloud.volume();
+    }
+
+    [[nodiscard]] const ParticleGrid& grid() const noexcept { return *grid_; }
+    [[nodiscard]] const ParticleCloud& cloud() const noexcept { return grid_->cloud(); }
+    [[nodiscard]] const DiscreteMediumSettings& settings() const noexcept { return st_; }
+    [[nodiscard]] F query_radius() const noexcept { return r_c_; }
+    /// Bulk (global) sigma_t = sum_i C_t,i / V and sigma_s [1/scene unit] (Eq. 16 over the domain;
+    /// Guo21 Sec. 5.5's global properties).
+    [[nodiscard]] double global_sigma_t() const noexcept { return sigma_t_; }
+    [[nodiscard]] double global_sigma_s() const noexcept { return sigma_s_; }
+    [[nodiscard]] std::size_t species_count() const noexcept { return species_.size(); }
+    [[nodiscard]] const std::vector<Bin>& bins(std::size_t species) const noexcept { return species_[species].bins; }
+
+    /// C_t of particle i [scene units^2] and its albedo.
+    [[nodiscard]] F extinction_cross_section(std::uint32_t i) const noexcept {
+        const CloudParticle& p = cloud()[i];
+        const SpeciesBins& sb = species_[cloud().species_of(i)];
+        return sb.ct_over_r2[std::size_t(sb.bin_of(p.r))] * p.r * p.r;
+    }
+    [[nodiscard]] F albedo(std::uint32_t i) const noexcept {
+        const SpeciesBins& sb = species_[cloud().species_of(i)];
+        return sb.albedo[std::size_t(sb.bin_of(cloud()[i].r))];
+    }
+    [[nodiscard]] const MiePhase<F, S>& phase_of(std::uint32_t i) const noexcept {
+        const SpeciesBins& sb = species_[cloud().species_of(i)];
+        return sb.bins[std::size_t(sb.bin_of(cloud()[i].r))].phase;
+    }
+    /// Phase function of particle i (NEE at its scattering vertex).
+    [[nodiscard]] PhaseEval<F, S> phase_eval(std::uint32_t i, const Vec3<F>& w_in, const Vec3<F>& w_out) const noexcept {
+        return phase_of(i).eval(w_in, w_out);
+    }
+    /// The particle whose centre is exactly p (a scattering vertex), or -1.
+    [[nodiscard]] std::int64_t particle_at(const Vec3<F>& p) const noexcept {
+        const Vec3<float> q(p);
+        for (const std::uint32_t i : grid_->cell(grid_->cell_of(q))) {
+            const CloudParticle& c = cloud()[i];
+            if (c.x == q.x && c.y == q.y && c.z == q.z) return std::int64_t(i);
+        }
+        return -1;
+    }
+
+    /// Optical depth sum_{members, 0 < s <= t} C_t,i / A of the query cylinder along ray; the
+    /// gather stops once the sum exceeds tau_cap (then any value > tau_cap is returned).
+    [[nodiscard]] F optical_depth(const Ray<F>& ray, F t, F tau_cap = std::numeric_limits<F>::infinity()) const noexcept {
+        F tau = 0;
+        grid_->for_each_in_cylinder(Vec3<float>(ray.o), Vec3<float>(ray.d), 0.0f, float(t), float(r_c_),
+                                    [&](std::uint32_t i, float, float) {
+                                        tau += extinction_cross_section(i) * inv_area_;
+                                        return !(tau > tau_cap);
+                                    });
+        return tau;
+    }
+    /// T_A (Eqs. 18-19); deterministic (rng unused).
+    [[nodiscard]] S transmittance(const Ray<F>& ray, F t, Rng&) const noexcept {
+        const F tau = optical_depth(ray, t, F(40));
+        return S(tau > F(40) ? F(0) : std::exp(-tau));
+    }
+
+    /// Eq. 24 over the query sphere of radius r_c (membership: centre within r_i + r_c of y;
+    /// measure mu_i = 4/3 pi (r_i + r_c)^3): Q(y; w_in -> w_out) [1/scene unit/sr]; 0 for an empty
+    /// sphere (Eq. 22's delta: the ray goes on unscattered).
+    [[nodiscard]] F query_sphere_q(const Vec3<F>& y, const Vec3<F>& w_in, const Vec3<F>& w_out, F r_query = F(-1)) const noexcept {
+        const F rq = r_query >= F(0) ? r_query : r_c_;
+        F q = 0;
+        grid_->for_each_in_sphere(Vec3<float>(y), float(rq), [&](std::uint32_t i, float) {
+            const F R = cloud()[i].r + rq;
+            const F mu = F(4.0 / 3.0) * pi_v<F> * R * R * R;
+            q += extinction_cross_section(i) * albedo(i) * phase_eval(i, w_in, w_out).value[0] / mu;
+            return true;
+        });
+        return q;
+    }
+
+    /// A free flight (see the file comment).
+    [[nodiscard]] Interaction<F, S> sample_interaction(const Ray<F>& ray, F t_max, Rng& rng) const noexcept {
+        Interaction<F, S> it;
+        // Pass 1: tau of the segment (P = 1 - e^{-tau}; beyond tau = 40 it is 1 in float and the
+        // gather stops after the current voxel), keeping up to kBuffer members so that pass 2 is
+        // not needed when they are all (sparse or opaque members).
+        constexpr int kBuffer = 16;
+        std::uint32_t buf_i[kBuffer];
+        float buf_s[kBuffer];
+        int nbuf = 0;
+        bool overflow = false;
+        F tau = 0;
+        {
+            const Vec3<float> o(ray.o), d(ray.d);
+            const float rc = float(r_c_), tm = float(t_max);
+            const CloudParticle* ps = cloud().particles().data();
+            grid_->walk_voxels(o, d, 0.0f, tm, [&](std::span<const std::uint32_t> refs, float te, float tx) {
+                for (const std::uint32_t i : refs) {
+                    float s, b2;
+                    if (!ParticleGrid::cylinder_member(ps[i], o, d, rc, s, b2)) continue;
+                    if (!(s > 0.0f && s <= tm && s >= te && s < tx)) continue;
+                    tau += extinction_cross_section(i) * inv_area_;
+                    if (nbuf < kBuffer) {
+                        buf_i[nbuf] = i;
+                        buf_s[nbuf] = s;
+                        ++nbuf;
+                    } else {
+                        overflow = true;
+                    }
+                }
+                return !(tau > F(40));
+            });
+        }
+        const F P = tau > F(40) ? F(1) : -std::expm1(-tau);
+        const F q = P > F(0) ? std::max(P, F(st_.forced_collision)) : F(0);
+        const F u = rng.uniform<F>();
+        if (!(u < q)) {
+            it.kind = EventKind::escape;
+            it.t = t_max;
+            it.p = ray(t_max);
+            it.weight = S(q > F(0) ? (F(1) - P) / (F(1) - q) : F(1));
+            return it;
+        }
+        const F tau_star = -std::log1p(-std::min(rng.uniform<F>() * P, F(1) - F(1e-7)));
+        std::int64_t chosen = -1;
+        float s_chosen = 0;
+        if (!overflow) {
+            // Order the buffered members by (s, index) (insertion sort) and invert the cumulative tau.
+            for (int a = 1; a < nbuf; ++a)
+                for (int b = a; b > 0 && (buf_s[b] < buf_s[b - 1] || (buf_s[b] == buf_s[b - 1] && buf_i[b] < buf_i[b - 1])); --b) {
+                    std::swap(buf_s[b], buf_s[b - 1]);
+                    std::swap(buf_i[b], buf_i[b - 1]);
+                }
+            F acc = 0;
+            for (int a = 0; a < nbuf; ++a) {
+                acc += extinction_cross_section(buf_i[a]) * inv_area_;
+                chosen = buf_i[a];
+                s_chosen = buf_s[a];
+                if (acc >= tau_star) break;
+            }
+        } else {
+            choose_member(ray, t_max, tau_star, chosen, s_chosen);
+        }
+        if (chosen < 0) {  // round-off: no member reached tau*; treat as escape of this sample
+            it.kind = EventKind::escape;
+            it.t = t_max;
+            it.p = ray(t_max);
+            it.weight = S(F(0));
+            return it;
+        }
+        const std::uint32_t i = std::uint32_t(chosen);
+        const CloudParticle& cp = cloud()[i];
+        it.kind = EventKind::scatter;
+        it.t = F(s_chosen);
+        it.p = Vec3<F>(cp.x, cp.y, cp.z);
+        const auto ps = phase_of(i).sample(ray.d, rng.template uniform2<F>());
+        if (!ps) {
+            it.kind = EventKind::absorb;
+            it.weight = S(F(0));
+            return it;
+        }
+        it.has_direction = true;
+        it.w = ps.w;
+        it.direction_pdf = ps.pdf;
+        it.nee = NeeKind::none;  // generic integrators: no phase() to connect with
+        it.weight = S(P / q * albedo(i)) * ps.weight;
+        return it;
+    }
+
+    /// Memory of the cloud + grid [bytes].
+    [[nodiscard]] std::size_t memory_bytes() const noexcept { return cloud().memory_bytes() + grid_->memory_bytes(); }
+
+private:
+    struct SpeciesBins {
+        double log_rmin = 0, inv_dlog = 0;
+        std::vector<Bin> bins;
+        std::vector<F> ct_over_r2, albedo;
+        [[nodiscard]] int bin_of(float r) const noexcept {
+            if (bins.size() <= 1) return 0;
+            const int b = int((std::log(double(r)) - log_rmin) * inv_dlog);
+            return std::clamp(b, 0, int(bins.size()) - 1);
+        }
+    };
+
+    /// The member where the cumulative optical depth (in order of s) first reaches tau_star.
+    void choose_member(const Ray<F>& ray, F t_max, F tau_star, std::int64_t& chosen, float& s_chosen) const noexcept {
+        const Vec3<float> o(ray.o), d(ray.d);
+        const float rc = float(r_c_);
+        const CloudParticle* ps = cloud().particles().data();
+        F acc = 0;
+        std::int64_t last_member = -1;
+        float last_s = 0;
+        grid_->walk_voxels(o, d, 0.0f, float(t_max), [&](std::span<const std::uint32_t> refs, float te, float tx) {
+            auto member = [&](std::uint32_t i, float& s) {
+                float b2;
+                if (!ParticleGrid::cylinder_member(ps[i], o, d, rc, s, b2)) return false;
+                return s > 0.0f && s <= float(t_max) && s >= te && s < tx;
+            };
+            F tv = 0;
+            for (const std::uint32_t i : refs) {
+                float s;
+                if (member(i, s)) tv += extinction_cross_section(i) * inv_area_;
+            }
+            if (tv <= F(0)) return true;
+            if (acc + tv < tau_star) {
+                acc += tv;
+                // remember the farthest member in case round-off leaves tau* unreached
+                for (const std::uint32_t i : refs) {
+                    float s;
+                    if (member(i, s) && (last_member < 0 || s >= last_s)) last_member = i, last_s = s;
+                }
+                return true;
+            }
+            // Members of this voxel in order of (s, index).
+            float prev_s = -std::numeric_limits<float>::infinity();
+            std::uint32_t prev_i = 0;
+            bool first = true;
+            for (;;) {
+                std::int64_t best = -1;
+                float best_s = 0;
+                for (const std::uint32_t i : refs) {
+                    float s;
+                    if (!member(i, s)) continue;
+                    const bool after = first || s > prev_s || (s == prev_s && i > prev_i);
+                    if (!after) continue;
+                    if (best < 0 || s < best_s || (s == best_s && i < std::uint32_t(best))) best = i, best_s = s;
+                }
+                if (best < 0) break;
+                first = false;
+                prev_s = best_s;
+                prev_i = std::uint32_t(best);
+                last_member = best;
+                last_s = best_s;
+                acc += extinction_cross_section(std::uint32_t(best)) * inv_area_;
+                if (acc >= tau_star) {
+                    chosen = best;
+                    s_chosen = best_s;
+                    return false;
+                }
+            }
+            return true;
+        });
+        if (chosen < 0 && last_member >= 0) {
+            chosen = last_member;
+            s_chosen = last_s;
+        }
+    }
+
+    std::shared_ptr<const ParticleGrid> grid_;
+    DiscreteMediumSettings st_;
+    std::vector<ParticleModel> models_;
+    std::vector<SpeciesBins> species_;
+    F r_c_ = 0, inv_area_ = 0;
+    double sigma_t_ = 0, sigma_s_ = 0;
+};
+
+/// Homogeneous grey medium with forced collisions (the paired continuous medium of Guo21
+/// Sec. 6.3, sampled like DiscreteParticleMedium so that thin media are not left to analog
+/// free flights): over a segment of length t_max, P = 1 - e^{-sigma_t t_max}; a collision is
+/// forced with probability q = max(P, q_min) at a distance from the exponential truncated to
+/// [0, t_max], weight (P / q) albedo; otherwise escape with weight (1 - P) / (1 - q). Unbiased for
+/// the RTE; NEE through phase() (a PhaseMedium).
+template <class Phase>
+class ForcedCollisionMedium {
+public:
+    using Float = typename Phase::Float;
+    using F = Float;
+    using Spectrum = grainlight::Spectrum<1, F>;
+    using S = Spectrum;
+
+    ForcedCollisionMedium(F sigma_t, F albedo, Phase phase, F q_min = F(0.5))
+        : sigma_t_(sigma_t), albedo_(albedo), q_min_(q_min), phase_(std::move(phase)) {
+        check_argument(std::isfinite(sigma_t) && sigma_t >= F(0), "ForcedCollisionMedium", "sigma_t", sigma_t, "[0, inf)");
+        check_argument(albedo >= F(0) && albedo <= F(1), "ForcedCollisionMedium", "albedo", albedo, "[0, 1]");
+        check_argument(q_min >= F(0) && q_min < F(1), "ForcedCollisionMedium", "q_min", q_min, "[0, 1)");
+    }
+    [[nodiscard]] const Phase& phase() const noexcept { return phase_; }
+    [[nodiscard]] F sigma_t() const noexcept { return sigma_t_; }
+    [[nodiscard]] S transmittance(const Ray<F>&, F t, Rng&) const noexcept { return S(std::exp(-sigma_t_ * t)); }
+    [[nodiscard]] Interaction<F, S> sample_interaction(const Ray<F>& ray, F t_max, Rng& rng) const noexcept {
+        Interaction<F, S> it;
+        const F P = std::isinf(t_max) ? (sigma_t_ > F(0) ? F(1) : F(0)) : -std::expm1(-sigma_t_ * t_max);
+        const F q = P > F(0) ? std::max(P, q_min_) : F(0);
+        if (!(rng.uniform<F>() < q)) {
+            it.kind = EventKind::escape;
+            it.t = t_max;
+            it.p = ray(t_max);
+            it.weight = S(q > F(0) ? (F(1) - P) / (F(1) - q) : F(1));
+            return it;
+        }
+        const F t = std::min(-std::log1p(-rng.uniform<F>() * P) / sigma_t_, t_max);
+        it.kind = EventKind::scatter;
+        it.t = t;
+        it.p = ray(t);
+        it.nee = NeeKind::phase;
+        it.weight = S(P / q * albedo_);
+        return it;
+    }
+
+private:
+    F sigma_t_, albedo_, q_min_;
+    Phase phase_;
+};
+
+/// The cloud as explicit smooth dielectric spheres of relative index eta (Guo21's EPT).
+template <std::floating_point F = float>
+class ExplicitSphereMedium {
+public:
+    using Float = F;
+    using Spectrum = grainlight::Spectrum<1, F>;
+    using S = Spectrum;
+
+    ExplicitSphereMedium(std::shared_ptr<const ParticleGrid> grid, F eta) : grid_(std::move(grid)), eta_(eta) {
+        check_argument(bool(grid_), "ExplicitSphereMedium", "grid", "null", "a particle grid");
+        check_argument(std::isfinite(eta) && eta > F(0) && eta != F(1), "ExplicitSphereMedium", "eta", eta,
+                       "> 0, != 1 (finite)");
+    }
+    [[nodiscard]] const ParticleGrid& grid() const noexcept { return *grid_; }
+
+    /// Sphere containing p, or -1.
+    [[nodiscard]] std::int64_t sphere_containing(const Vec3<float>& p) const noexcept {
+        std::int64_t found = -1;
+        grid_->for_each_in_sphere(p, 0.0f, [&](std::uint32_t i, float) {
+            found = i;
+            return false;
+        });
+        return found;
+    }
+    /// First sphere hit along o + t d, t in (eps, t_max]: index (or -1) and t.
+    [[nodiscard]] std::int64_t first_hit(const Vec3<float>& o, const Vec3<float>& d, float t_max, float& t_hit) const noexcept {
+        const CloudParticle* ps = grid_->cloud().particles().data();
+        std::int64_t best = -1;
+        float best_t = t_max;
+        grid_->walk_voxels(o, d, 0.0f, t_max, [&](std::span<const std::uint32_t> refs, float, float tx) {
+            for (const std::uint32_t i : refs) {
+                float s, b2;
+                if (!ParticleGrid::cylinder_member(ps[i], o, d, 0.0f, s, b2)) continue;
+                const float h = std::sqrt(std::max(0.0f, ps[i].r * ps[i].r - b2));
+                const float t = s - h;
+                if (t > 1e-5f * ps[i].r && t <= best_t) best = i, best_t = t;
+            }
+            return !(best >= 0 && best_t < tx);
+        });
+        t_hit = best_t;
+        return best;
+    }
+
+    [[nodiscard]] S transmittance(const Ray<F>& ray, F t, Rng&) const noexcept {
+        const Vec3<float> o(ray.o), d(ray.d);
+        if (sphere_containing(o) >= 0) return S(F(0));
+        float th;
+        return S(first_hit(o, d, float(t), th) >= 0 ? F(0) : F(1));
+    }
+
+    [[nodiscard]] Interaction<F, S> sample_interaction(const Ray<F>& ray, F t_max, Rng& rng) const noexcept {
+        Interaction<F, S> it;
+        const Vec3<float> o(ray.o), d(ray.d);
+        const CloudParticle* ps = grid_->cloud().particles().data();
+        std::int64_t idx = sphere_containing(o);
+        float t = 0;
+        if (idx >= 0) {  // inside sphere idx: leave it
+            const CloudParticle& c = ps[idx];
+            const Vec3<float> v = c.center() - o;
+            const float s = glm::dot(v, d), b2 = glm::dot(v, v) - s * s;
+            t = s + std::sqrt(std::max(0.0f, c.r * c.r - b2));
+            if (!(t < float(t_max))) idx = -1, t = float(t_max);
+        } else {
+            idx = first_hit(o, d, float(t_max), t);
+        }
+        if (idx < 0) {
+            it.kind = EventKind::escape;
+            it.t = t_max;
+            it.p = ray(t_max);
+            return it;
+        }
+        const CloudParticle& c = ps[idx];
+        const Vec3<F> p = ray(F(t));
+        const Vec3<F> n = glm::normalize(p - Vec3<F>(c.center()));
+        bool refracted = false;
+        F eta_rel = F(1);
+        const Vec3<F> w = sample_dielectric_dir(ray.d, n, rng.uniform<F>(), refracted);
+        // Offset to the side the new direction leaves into.
+        const F eps = F(2e-4) * F(c.r) + F(1e-6) * max_abs_component(p);
+        it.kind = EventKind::scatter;
+        it.t = F(t);
+        it.p = p + (glm::dot(w, n) > F(0) ? eps : -eps) * n;
+        it.w = w;
+        it.has_direction = true;
+        it.direction_pdf = F(0);
+        it.nee = NeeKind::none;
+        (void)eta_rel;
+        return it;
+    }
+
+private:
+    /// Fresnel reflection (probability F) or refraction at the sphere surface with outward n.
+    [[nodiscard]] Vec3<F> sample_dielectric_dir(const Vec3<F>& d, const Vec3<F>& n, F u, bool& refracted) const noexcept {
+        const Vec3<F> wi = -d;
+        const F cos_i = glm::dot(wi, n);
+        const F fr = fresnel_dielectric(cos_i, eta_);
+        Vec3<F> wt(F(0));
+        F er = F(1);
+        if (u >= fr && refract(wi, n, eta_, wt, &er)) {
+            refracted = true;
+            return glm::normalize(wt);
+        }
+        refracted = false;
+        return glm::normalize(d - F(2) * glm::dot(d, n) * n);
+    }
+
+    std::shared_ptr<const ParticleGrid> grid_;
+    F eta_;
+};
+
+}  // namespace grainlight

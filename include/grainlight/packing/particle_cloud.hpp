@@ -1,0 +1,180 @@
+/// @file grainlight/packing/particle_cloud.hpp
+/// A cloud of individually placed spherical particles (Guo21 Sec. 5: "we generate and store
+/// N_tot particles with random positions and log-normal distributed radii"): uniform random
+/// centres inside a shape (any geometry/voxelized_boundary.hpp BoundaryShape: BoxBoundary,
+/// SphereBoundary, a closed MeshBoundary), radii drawn from a size distribution
+/// (optics/psd.hpp SizeDistribution, sampled by inversion), and mixtures of several particle
+/// species (each with its own PSD and number share; Guo21 Sec. 7 names mixtures as a limitation).
+///
+/// Storage: 16 bytes per particle (float centre + float radius), particles grouped by species
+/// (species s owns indices [species_begin(s), species_begin(s + 1))). Positions are in scene
+/// units; PSD radii are in micrometres and converted with `um_per_unit` (1e6: scene in metres).
+/// Overlaps are not prevented (a Poisson/binomial cloud, as the paper's sparse media assume).
+///
+/// Determinism: particle i of species s uses Pcg32::from_key(seed, s, i): the same cloud for a
+/// seed on any machine and thread count. The counts per species are round(share * N) (largest
+/// remainders), not random.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "grainlight/core/error.hpp"
+#include "grainlight/core/rng.hpp"
+#include "grainlight/core/vector.hpp"
+#include "grainlight/geometry/aabb.hpp"
+#include "grainlight/geometry/voxelized_boundary.hpp"
+#include "grainlight/optics/psd.hpp"
+
+namespace grainlight {
+
+/// One particle: centre and radius in scene units (16 bytes).
+struct CloudParticle {
+    float x = 0, y = 0, z = 0, r = 0;
+    [[nodiscard]] Vec3<float> center() const noexcept { return {x, y, z}; }
+};
+static_assert(sizeof(CloudParticle) == 16, "a cloud particle is 16 bytes");
+
+/// One species of a mixture: a radius sampler u -> r [um] (inversion of its PSD) and its number
+/// share (> 0; shares are normalized over the species).
+struct CloudSpecies {
+    std::function<double(double)> sample_radius_um;
+    double share = 1.0;
+    std::string name;
+};
+
+/// A species from any SizeDistribution (the PSD is copied into the sampler).
+template <SizeDistribution Psd>
+[[nodiscard]] CloudSpecies cloud_species(const Psd& psd, double share = 1.0, std::string name = "") {
+    return {[psd](double u) { return double(psd.sample(u)); }, share, std::move(name)};
+}
+/// A monodisperse species (MonodispersePsd is not a density, so it has its own overload).
+[[nodiscard]] inline CloudSpecies cloud_species(const MonodispersePsd& psd, double share = 1.0, std::string name = "") {
+    const double r = psd.radius();
+    return {[r](double) { return r; }, share, std::move(name)};
+}
+
+class ParticleCloud {
+public:
+    ParticleCloud() = default;
+
+    /// N particles uniformly inside `shape` (rejection sampling in shape.bounds()), species drawn
+    /// by number share, radii from each species' sampler [um] divided by um_per_unit.
+    template <BoundaryShape Shape>
+    static ParticleCloud generate(const Shape& shape, std::uint64_t count, const std::vector<CloudSpecies>& species,
+                                  std::uint64_t seed, double um_per_unit = 1e6) {
+        const char* who = "ParticleCloud::generate";
+        check_argument(count >= 1, who, "count", count, ">= 1 (an empty cloud has no medium)");
+        check_argument(count < (std::uint64_t(1) << 32) - 1, who, "count", count, "< 2^32 - 1");
+        check_argument(!species.empty(), who, "species.size()", species.size(), ">= 1");
+        check_argument(std::isfinite(um_per_unit) && um_per_unit > 0, who, "um_per_unit", um_per_unit, "> 0 (finite)");
+        double total_share = 0;
+        for (std::size_t s = 0; s < species.size(); ++s) {
+            check_argument(std::isfinite(species[s].share) && species[s].share > 0, who,
+                           "species[" + std::to_string(s) + "].share", species[s].share, "> 0 (finite)");
+            check_argument(bool(species[s].sample_radius_um), who, "species[" + std::to_string(s) + "].sample_radius_um",
+                           "empty", "a radius sampler");
+            total_share += species[s].share;
+        }
+        const Aabb<double> b = shape.bounds();
+        const Vec3d lo = b.lo, ext = b.hi - b.lo;
+        for (int a = 0; a < 3; ++a)
+            check_argument(std::isfinite(ext[a]) && ext[a] > 0, who, "shape.bounds() extent", ext[a], "(0, inf)");
+
+        // Counts per species by largest remainders.
+        std::vector<std::uint64_t> n(species.size());
+        std::vector<std::pair<double, std::size_t>> rem;
+        std::uint64_t assigned = 0;
+        for (std::size_t s = 0; s < species.size(); ++s) {
+            const double want = double(count) * species[s].share / total_share;
+            n[s] = std::uint64_t(std::floor(want));
+            assigned += n[s];
+            rem.push_back({want - double(n[s]), s});
+        }
+        std::sort(rem.begin(), rem.end(), [](auto& a, auto& c) { return a.first > c.first || (a.first == c.first && a.second < c.second); });
+        for (std::size_t k = 0; assigned < count; ++k, ++assigned) ++n[rem[k % rem.size()].second];
+
+        ParticleCloud c;
+        c.particles_.reserve(count);
+        c.begin_.push_back(0);
+        c.um_per_unit_ = um_per_unit;
+        std::uint64_t tries = 0;
+        for (std::size_t s = 0; s < species.size(); ++s) {
+            for (std::uint64_t i = 0; i < n[s]; ++i) {
+                Rng rng = Rng::from_key(seed, std::uint64_t(s), i);
+                Vec3d p;
+                for (int k = 0;; ++k) {
+                    ++tries;
+                    p = lo + Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()) * ext;
+                    if (shape.inside(p)) break;
+                    check_argument(k < 100000, who, "shape", "no point inside after 1e5 tries", "a shape with volume");
+                }
+                const double r_um = species[s].sample_radius_um(rng.uniform<double>());
+                check_argument(std::isfinite(r_um) && r_um > 0, who, "species[" + std::to_string(s) + "] radius_um", r_um,
+                               "> 0 (finite)");
+                c.particles_.push_back({float(p.x), float(p.y), float(p.z), float(r_um / um_per_unit)});
+                c.r_max_ = std::max(c.r_max_, double(float(r_um / um_per_unit)));
+            }
+            c.begin_.push_back(std::uint32_t(c.particles_.size()));
+        }
+        c.volume_ = ext.x * ext.y * ext.z * double(count) / double(tries);
+        if constexpr (std::is_same_v<Shape, BoxBoundary>) c.volume_ = ext.x * ext.y * ext.z;
+        if constexpr (std::is_same_v<Shape, SphereBoundary>) c.volume_ = 4.0 / 3.0 * pi_v<double> * std::pow(shape.radius, 3);
+        c.bounds_ = b;
+        return c;
+    }
+
+    /// Build from explicit particles (one species). Radii must be > 0 and finite.
+    static ParticleCloud from_particles(std::vector<CloudParticle> ps, const Aabb<double>& domain, double volume,
+                                        double um_per_unit = 1e6) {
+        const char* who = "ParticleCloud::from_particles";
+        check_argument(!ps.empty(), who, "particles.size()", ps.size(), ">= 1 (an empty cloud has no medium)");
+        check_argument(std::isfinite(volume) && volume > 0, who, "volume", volume, "> 0 (finite)");
+        ParticleCloud c;
+        for (std::size_t i = 0; i < ps.size(); ++i) {
+            check_argument(std::isfinite(ps[i].r) && ps[i].r > 0, who, "particles[" + std::to_string(i) + "].r", ps[i].r,
+                           "> 0 (finite)");
+            check_argument(std::isfinite(ps[i].x + ps[i].y + ps[i].z), who, "particles[" + std::to_string(i) + "] centre",
+                           ps[i].x + ps[i].y + ps[i].z, "finite");
+            c.r_max_ = std::max(c.r_max_, double(ps[i].r));
+        }
+        c.begin_ = {0, std::uint32_t(ps.size())};
+        c.particles_ = std::move(ps);
+        c.bounds_ = domain;
+        c.volume_ = volume;
+        c.um_per_unit_ = um_per_unit;
+        return c;
+    }
+
+    [[nodiscard]] std::size_t size() const noexcept { return particles_.size(); }
+    [[nodiscard]] const CloudParticle& operator[](std::size_t i) const noexcept { return particles_[i]; }
+    [[nodiscard]] const std::vector<CloudParticle>& particles() const noexcept { return particles_; }
+    [[nodiscard]] std::size_t species_count() const noexcept { return begin_.empty() ? 0 : begin_.size() - 1; }
+    [[nodiscard]] std::uint32_t species_begin(std::size_t s) const noexcept { return begin_[s]; }
+    /// Species of particle i (binary search over the few species ranges).
+    [[nodiscard]] std::size_t species_of(std::uint32_t i) const noexcept {
+        return std::size_t(std::upper_bound(begin_.begin() + 1, begin_.end(), i) - (begin_.begin() + 1));
+    }
+    /// Largest radius [scene units].
+    [[nodiscard]] double max_radius() const noexcept { return r_max_; }
+    /// Volume of the domain the centres fill [scene units^3] (exact for a box or sphere, else by
+    /// the rejection rate).
+    [[nodiscard]] double volume() const noexcept { return volume_; }
+    [[nodiscard]] const Aabb<double>& domain() const noexcept { return bounds_; }
+    [[nodiscard]] double um_per_unit() const noexcept { return um_per_unit_; }
+    /// Bytes held by the particle array.
+    [[nodiscard]] std::size_t memory_bytes() const noexcept { return particles_.capacity() * sizeof(CloudParticle); }
+
+private:
+    std::vector<CloudParticle> particles_;
+    std::vector<std::uint32_t> begin_;
+    double r_max_ = 0, volume_ = 0, um_per_unit_ = 1e6;
+    Aabb<double> bounds_;
+};
+
+}  // namespace grainlight
