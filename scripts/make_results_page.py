@@ -42,6 +42,7 @@ PAPERS = [
 PAPER_OF = {
     "packing": "meng15", "grain_stats": "meng15", "mie": "guo21",
     "slab": "foundation", "vpt_sphere_medium": "foundation", "diffusion_profiles": "foundation",
+    "python_phase": "guo21",
 }
 OTHER = ("other", "Other programs", None)
 
@@ -75,6 +76,13 @@ KEYS = {
         ("Qsca", "qsca", "", ""),
         ("Qback", "qback", "", ""),
         ("g", "g", "0.8669 (m = 1.33 - 1e-5 i)", "MIEV0: g Qsca / Qsca = 1.821854 / 2.096594"),
+    ],
+    "python_phase": [
+        ("size parameter x", "x", "", ""),
+        ("Mie Qext", "qext", "-> 2 for large x", "extinction paradox"),
+        ("Mie g", "g", "", ""),
+        ("GOA Qext", "goa_qext", "Mie minus the edge term ~2 x^(-2/3)", "van de Hulst 1957"),
+        ("phase function integral", "phase_integral", "1", "normalization"),
     ],
     "guo21_fig2_orders": [
         ("energy difference p = 3 vs p = 100", "energy_diff_p3_vs_p100_r", "almost identical curves", "Guo21 Fig. 2"),

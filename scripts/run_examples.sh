@@ -49,6 +49,26 @@ for exe in "$BUILD"/bin/*; do
     failed+=("$name")
   fi
 done
+# The Python module's example (built when pybind11 + numpy are present; skipped otherwise).
+if compgen -G "$BUILD/python/grainlight*.so" >/dev/null && [ -x /usr/bin/python3 ]; then
+  name=python_phase
+  mkdir -p "$OUT/$name"
+  echo "== $name (examples/python/plot_phase.py)" >&2
+  echo "PYTHONPATH=${BUILD#"$ROOT"/}/python /usr/bin/python3 examples/python/plot_phase.py --out ${OUT#"$ROOT"/}/$name" \
+    > "$OUT/$name/command.txt"
+  t0=$(date +%s)
+  if PYTHONPATH="$BUILD/python" /usr/bin/python3 examples/python/plot_phase.py --out "$OUT/$name" > "$OUT/$name/stdout.txt"; then
+    echo "ok $(( $(date +%s) - t0 ))" > "$OUT/$name/status.txt"
+    echo "   ok in $(( $(date +%s) - t0 )) s" >&2
+  else
+    rc=$?
+    echo "failed $rc $(( $(date +%s) - t0 ))" > "$OUT/$name/status.txt"
+    echo "   FAILED ($name, exit $rc)" >&2
+    failed+=("$name")
+  fi
+else
+  echo "note: Python module not built (pybind11/numpy missing); python_phase skipped" >&2
+fi
 echo "examples took $(( $(date +%s) - job_t0 )) s" >&2
 # The results page (Debian's python: standard library only). Written even when an example failed.
 if [ -x /usr/bin/python3 ]; then
