@@ -77,6 +77,15 @@ KEYS = {
         ("Qback", "qback", "", ""),
         ("g", "g", "0.8669 (m = 1.33 - 1e-5 i)", "MIEV0: g Qsca / Qsca = 1.821854 / 2.096594"),
     ],
+    "embree_aggregate": [
+        ("image mean, EPT over Embree (green)", "mean_embree", "= library EPT mean within the error",
+         "render_ept on the same scene"),
+        ("its standard error", "mean_embree_se", "", ""),
+        ("image mean, library render_ept", "mean_library", "", "integrators/ept.hpp"),
+        ("grains", "grains", "", ""),
+        ("aggregate memory [MB]", "memory_mb", "O(1) in the grain count", "Meng15 Sec. 3.2"),
+        ("rays per second (Embree queries)", "rays_per_second", "", ""),
+    ],
     "python_phase": [
         ("size parameter x", "x", "", ""),
         ("Mie Qext", "qext", "-> 2 for large x", "extinction paradox"),

@@ -27,7 +27,7 @@ def main():
     os.makedirs(args.out, exist_ok=True)
 
     x = 2 * math.pi * args.radius_um / args.wavelength_um
-    theta = np.radians(np.linspace(0.0, 180.0, 1801))
+    theta = np.radians(np.linspace(0.0, 180.0, 721))
     mu = np.cos(theta)
     qext, qsca, qback, g = grainlight.mie(args.m, x)
     s1, s2 = grainlight.mie_S1_S2(args.m, x, mu)
