@@ -24,6 +24,7 @@
 #include "grainlight/optics/lorenz_mie.hpp"
 #include "grainlight/optics/psd.hpp"
 #include "grainlight/packing/md_packer.hpp"
+#include "grainlight/precompute/scatterometer.hpp"
 
 namespace py = pybind11;
 using cplx = std::complex<double>;
@@ -207,6 +208,57 @@ py::dict md_pack(std::size_t n, double fraction, std::uint64_t seed, double side
     return d;
 }
 
+py::dict grain_stats(const std::string& preset, std::uint64_t rays, std::uint64_t seed, int level) {
+    const grainlight::GrainPreset p = grainlight::grain_preset(preset);
+    grainlight::ScatterometerConfig cfg;
+    cfg.rays = rays;
+    cfg.seed = seed;
+    std::optional<grainlight::GrainStats> st;
+    {
+        py::gil_scoped_release release;
+        const auto grain = grainlight::ScatterometerGrain::procedural(p.shape, p.radius, p.material, p.seed, level);
+        st.emplace(grainlight::run_scatterometer(grain, cfg));
+    }
+    const auto& s = *st;
+    auto per_channel = [&](auto f) {
+        Array a(std::vector<py::ssize_t>{3});
+        for (std::size_t c = 0; c < 3; ++c) a.mutable_data()[c] = f(c);
+        return a;
+    };
+    py::dict d;
+    d["preset"] = p.name;
+    d["rays"] = s.rays;
+    d["beta"] = s.beta();
+    d["beta_stderr"] = s.beta_stderr();
+    d["lambda_delta"] = s.lambda_delta();
+    d["alpha_s"] = per_channel([&](std::size_t c) { return s.alpha_s(c); });
+    d["lambda_s"] = per_channel([&](std::size_t c) { return s.lambda_s(c); });
+    d["teleport_along"] = per_channel([&](std::size_t c) { return s.teleport_along(c); });
+    d["g"] = per_channel([&](std::size_t c) { return s.g(c); });
+    d["exit_probability"] = per_channel([&](std::size_t c) { return s.exit[c]; });
+    const auto edges = grainlight::ScatterometerGrid::mu_edges(s.grid.phase_bins);
+    Array mu_edges(std::vector<py::ssize_t>{py::ssize_t(edges.size())});
+    std::copy(edges.begin(), edges.end(), mu_edges.mutable_data());
+    Array hist(std::vector<py::ssize_t>{3, py::ssize_t(s.grid.phase_bins)});
+    for (std::size_t c = 0; c < 3; ++c)
+        std::copy(s.phase_hist[c].begin(), s.phase_hist[c].end(), hist.mutable_data() + c * s.grid.phase_bins);
+    d["mu_edges"] = mu_edges;
+    d["phase_hist"] = hist;
+    if (const auto* col = grainlight::find_meng15_table1(p.paper_column)) {
+        py::dict t;
+        t["column"] = col->name;
+        t["beta"] = col->beta, t["lambda_delta"] = col->lambda_delta, t["lambda_s"] = col->lambda_s, t["alpha_s"] = col->alpha_s;
+        d["meng15_table1"] = t;
+    }
+    return d;
+}
+
+std::vector<std::string> grain_preset_names() {
+    std::vector<std::string> names;
+    for (const auto& p : grainlight::grain_presets()) names.push_back(p.name);
+    return names;
+}
+
 std::string doc(const std::string& body) { return body + "\n\n" + convention_note; }
 
 }  // namespace
@@ -265,6 +317,15 @@ PYBIND11_MODULE(grainlight, mod) {
                 "mean_C_t, mean_C_s [um^2], g (one per wavelength), theta [rad] and phase [1/sr] "
                 "(wavelengths x angles).")
                 .c_str());
+    mod.def("grain_presets", &grain_preset_names, "grain_presets() -> list of the grain preset names (Meng15 Table 1 stand-ins).");
+    mod.def("grain_stats", &grain_stats, py::arg("preset"), py::arg("rays") = 200000, py::arg("seed") = 1,
+            py::arg("level") = 5,
+            "grain_stats(preset, rays=200000, seed=1, level=5) -> dict\n\n"
+            "The virtual scatterometer (Meng et al. 2015 Secs. 4.1-4.2) on one preset grain: beta (hit "
+            "probability) and its standard error, lambda_delta, and per RGB channel alpha_s, lambda_s, "
+            "teleport_along, g, exit_probability (numpy arrays of 3); the phase histogram phase_hist "
+            "(3 x bins, P(exit and cos theta in bin)) on mu_edges; and meng15_table1 (the paper's column) "
+            "when the preset has one. Lengths in bounding-sphere radii. Deterministic for a seed.");
     mod.def("md_pack", &md_pack, py::arg("n"), py::arg("fraction"), py::arg("seed") = 1, py::arg("side") = 1.0,
             "md_pack(n, fraction, seed=1, side=1.0) -> dict\n\n"
             "Periodic packing of n equal spheres in the cube [0, side)^3 by event-driven molecular dynamics "

@@ -35,10 +35,12 @@ def main():
     gext, gsca, gabs = grainlight.goa(args.m, x)
     t1, t2 = grainlight.goa_S1_S2(args.m, x, mu)
     p_goa = (np.abs(t1) ** 2 + np.abs(t2) ** 2) / (2 * math.pi * x * x * gsca)
-    # Normalization check by Gauss-Legendre (independent of the plotting grid).
-    nodes, weights = np.polynomial.legendre.leggauss(4000)
-    a1, a2 = grainlight.mie_S1_S2(args.m, x, nodes)
-    norm = 2 * math.pi * float(np.sum(weights * (np.abs(a1) ** 2 + np.abs(a2) ** 2))) / (2 * math.pi * x * x * qsca)
+    # Normalization check on a fine theta grid (independent of the plotting grid):
+    # 2 pi int p(theta) sin(theta) dtheta = 1.
+    tf = np.linspace(0.0, math.pi, 40001)
+    a1, a2 = grainlight.mie_S1_S2(args.m, x, np.cos(tf))
+    f = (np.abs(a1) ** 2 + np.abs(a2) ** 2) * np.sin(tf) / (2 * math.pi * x * x * qsca)
+    norm = 2 * math.pi * float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(tf)))
 
     with open(os.path.join(args.out, "phase.csv"), "w") as f:
         f.write("theta_deg,phase_mie,phase_goa\n")

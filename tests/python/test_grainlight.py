@@ -216,3 +216,23 @@ def test_md_pack_tile_centres():
     assert dist.min() >= 2 * R * (1 - 1e-9)
     again = grainlight.md_pack(200, 0.55, seed=3, side=2.0)
     assert np.array_equal(again["centres"], c)  # deterministic for a seed
+
+
+def test_grain_stats_glass_bead_against_meng15_table1():
+    # Meng15 Table 1, glass beads: beta 1.00, lambda_delta 0.00, alpha_s 1.00, lambda_s 1.44
+    # (our bead: ior ~1.5 vs the paper's ~1.46; measured 1.43).
+    assert "glass-bead" in grainlight.grain_presets()
+    s = grainlight.grain_stats("glass-bead", rays=20000, seed=2)
+    t = s["meng15_table1"]
+    assert t["column"] == "glass beads" and t["lambda_s"] == 1.44
+    assert s["beta"] == pytest.approx(1.0, abs=1e-12)
+    assert s["lambda_delta"] == pytest.approx(0.0, abs=1e-12)
+    assert np.allclose(s["alpha_s"], 1.0, atol=1e-3)  # lossless: only bounce-limit paths are lost
+    assert np.mean(s["lambda_s"]) == pytest.approx(t["lambda_s"], abs=0.04)
+    # The phase histogram holds every exiting ray: its sum is P(hit and exit) per channel.
+    assert s["phase_hist"].shape == (3, len(s["mu_edges"]) - 1)
+    assert np.allclose(s["phase_hist"].sum(axis=1), s["exit_probability"], rtol=1e-12)
+    again = grainlight.grain_stats("glass-bead", rays=20000, seed=2)
+    assert np.array_equal(again["phase_hist"], s["phase_hist"])
+    with pytest.raises(ValueError, match="preset"):
+        grainlight.grain_stats("granite")
