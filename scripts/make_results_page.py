@@ -25,6 +25,8 @@ import sys
 import urllib.parse
 
 # Papers in page order: key, citation, docs page (relative to the repository root).
+SHORT = {"meng15": "Meng15", "guo21": "Guo21", "wang18": "Wang18", "moon07": "Moon07", "foundation": "foundation",
+         "adapters": "adapters", "other": "other"}
 PAPERS = [
     ("meng15", "Meng, Papas, Habel, Dachsbacher, Marschner, Gross, Jarosz 2015, "
                "Multi-Scale Modeling and Rendering of Granular Materials (ACM TOG 34(4))", "docs/meng15.md"),
@@ -58,18 +60,18 @@ KEYS = {
         ("T std. error", "T_stderr", "", ""),
     ],
     "vpt_sphere_medium": [
-        ("image size", "width", "320 x 240 at quick", "scene definition"),
-        ("samples per pixel", "spp", "", ""),
-        ("mean RGB (green)", "mean_rgb[1]", "", ""),
+        ("mean radiance, green", "mean_rgb[1]", "0.2031 (docs/gallery.md, seed 1)", "bit-identical for any thread count"),
+        ("samples per pixel", "spp", "64 at quick", "scene definition"),
         ("paths per second", "paths_per_second", "", ""),
-        ("seconds", "seconds", "", ""),
     ],
     "diffusion_profiles": [
-        ("R exact (H-function)", "R_exact", "exact", "Chandrasekhar H-function"),
-        ("R Monte Carlo", "R_mc", "equals R exact", "Monte Carlo of the same half-space"),
-        ("R classical dipole", "R_dipole", "below exact", "Jensen et al. 2001"),
-        ("R improved dipole", "R_improved", "closer to exact", "d'Eon & Irving 2011 (Meng15 App. A)"),
-        ("R multipole improved", "R_multipole_improved", "", ""),
+        ("R Monte Carlo (albedo 0.99, B = 4)", "R_mc", "reference", "Monte Carlo of the same slab"),
+        ("R multipole, improved", "R_multipole_improved", "= R Monte Carlo", "d'Eon & Irving 2011 (Meng15 App. A)"),
+        ("R multipole, classical", "R_multipole_classical", "= R Monte Carlo", "Donner & Jensen 2005"),
+        ("R dipole (semi-infinite)", "R_dipole", "above the slab's R", "Jensen et al. 2001"),
+        ("R improved dipole", "R_improved", "", ""),
+        ("T multipole improved", "T_multipole_improved", "", ""),
+        ("T Monte Carlo", "T_diffuse_mc", "", ""),
     ],
     "mie": [
         ("Qext (m = 1.33, x = 100)", "qext", "2.101 (m = 1.33 - 1e-5 i)", "MIEV0 test problems (Wiscombe 1979)"),
@@ -94,8 +96,9 @@ KEYS = {
         ("phase function integral", "phase_integral", "1", "normalization"),
     ],
     "guo21_fig2_orders": [
-        ("energy difference p = 3 vs p = 100", "energy_diff_p3_vs_p100_r", "almost identical curves", "Guo21 Fig. 2"),
-        ("max rel. difference p = 3 vs p = 100", "max_rel_diff_p3_vs_p100_r", "", ""),
+        ("energy diff. p = 3 vs p = 100, r = 2 um", "energy_diff_p3_vs_p100_r2", "almost identical curves", "Guo21 Fig. 2"),
+        ("energy diff., r = 10 um", "energy_diff_p3_vs_p100_r10", "almost identical", "Guo21 Fig. 2"),
+        ("energy diff., r = 100 um", "energy_diff_p3_vs_p100_r100", "almost identical", "Guo21 Fig. 2"),
     ],
     "guo21_fig3_extinction": [
         ("RelMSE C_t p = 3 vs p = 1, r >= 1 um", "relmse_p3_vs_p1_r_ge_1", "< 1e-5", "Guo21 Sec. 6 / Fig. 3"),
@@ -104,8 +107,10 @@ KEYS = {
         ("GOA vs Mie rel. deviation, r = 100 um", "goa_vs_mie_rel_dev_r100", "", ""),
     ],
     "guo21_fig4_amplitudes": [
-        ("radii", "pooled_r", "good agreement for r > 1 um", "Guo21 Fig. 4"),
-        ("energy", "energy_r", "", ""),
+        ("GOA vs Mie energy error, r = 1 um", "energy_r1", "discrepancies at 1 um", "Guo21 Fig. 4"),
+        ("energy error, r = 10 um", "energy_r10", "good agreement for r > 1 um", "Guo21 Fig. 4"),
+        ("energy error, r = 100 um", "energy_r100", "very good at 100 um", "Guo21 Fig. 4"),
+        ("energy error, r = 0.1 um", "energy_r0.1", "large below 1 um", "Guo21 Fig. 4"),
     ],
     "guo21_fig6_error_runtime": [
         ("energy-weighted error, eta = 1.33, r = 2 um", "energy_err_eta133_r2", "< 0.01 for r >= 2 um", "Guo21 Fig. 6"),
@@ -114,11 +119,16 @@ KEYS = {
         ("t_Mie / t_GOA, r = 100 um", "ratio_r100", "grows linearly with r", "Guo21 Fig. 6"),
         ("t_Mie / t_GOA, r = 1000 um", "ratio_r1000", "two orders of magnitude", "Guo21 Fig. 6"),
     ],
-    "guo21_fig8_phase": [],
+    "guo21_fig8_phase": [
+        ("g, uniform 0.1-1 um", "g_uniform_0.1_1_550nm", "more forward-peaked as radii grow", "Guo21 Fig. 8"),
+        ("g, uniform 1-10 um", "g_uniform_1_10_550nm", "", ""),
+        ("g, uniform 10-100 um", "g_uniform_10_100_550nm", "", ""),
+        ("g, log-normal 10 um, 2", "g_lognormal_10_2_550nm", "", ""),
+    ],
     "guo21_fig11_diffraction_share": [
-        ("diffraction share of scattered energy", "total_share_r", "about half for large particles",
-         "Guo21 Fig. 11 / Babinet"),
-        ("diffraction half-angle [deg]", "half_angle_deg_r", "confined near 0 at 1000 um", "Guo21 Fig. 11"),
+        ("diffraction share, r = 2 um", "total_share_r2", "about half (Babinet)", "Guo21 Fig. 11"),
+        ("diffraction share, r = 1000 um", "total_share_r1000", "about half", "Guo21 Fig. 11"),
+        ("diffraction half-angle [deg], r = 1000 um", "half_angle_deg_r1000", "confined near forward", "Guo21 Fig. 11"),
     ],
     "meng15_fig5_shape_of_grains": [
         ("grains", "grains", "millions to billions", "Meng15 Fig. 5"),
@@ -133,32 +143,52 @@ KEYS = {
         ("chords < 0.1 R (exponential model)", "short_chord_fraction_dixmier", "", ""),
     ],
     "meng15_fig6_free_flight": [
-        ("packing rate", "packing_rate", "", ""),
-        ("mean free flight (TT)", "chord_mean", "Eq. 4", "Meng15 Fig. 6 bottom"),
-        ("lambda_b", "lambda_b", "", ""),
+        ("salt: mean free flight, TT", "salt_tt_mean", "= Eq. 4", "Meng15 Fig. 6 bottom"),
+        ("salt: Eq. 4", "salt_eq4_mean", "", "Meng15 Eq. 4"),
+        ("flour: TT", "flour_tt_mean", "= Eq. 4", "Meng15 Fig. 6 bottom"),
+        ("flour: Eq. 4", "flour_eq4_mean", "", "Meng15 Eq. 4"),
+        ("sand: TT", "sand_tt_mean", "= Eq. 4", "Meng15 Fig. 6 bottom"),
+        ("sand: Eq. 4", "sand_eq4_mean", "", "Meng15 Eq. 4"),
     ],
     "meng15_fig6_ept_free_flight": [
         ("max rel. error of mean free path vs Eq. 4", "max_rel_mean_error", "EPT follows Eq. 4", "Meng15 Fig. 6 bottom"),
     ],
     "meng15_table1_grain_stats": [
-        ("beta", "beta", "see beta_paper", "Meng15 Table 1"),
-        ("beta (paper)", "beta_paper", "", "Meng15 Table 1"),
-        ("lambda_s", "lambda_s", "see lambda_s_paper", "Meng15 Table 1"),
-        ("lambda_s (paper)", "lambda_s_paper", "", "Meng15 Table 1"),
-        ("alpha_s", "alpha_s", "see alpha_s_paper", "Meng15 Table 1"),
-        ("alpha_s (paper)", "alpha_s_paper", "", "Meng15 Table 1"),
+        ("glass-bead: beta", "grains[0].beta", "1.00", "Meng15 Table 1"),
+        ("glass-bead: lambda_s", "grains[0].lambda_s", "1.44", "Meng15 Table 1"),
+        ("flour: beta", "grains[1].beta", "0.66", "Meng15 Table 1"),
+        ("flour: lambda_s", "grains[1].lambda_s", "0.18", "Meng15 Table 1"),
+        ("salt: beta", "grains[2].beta", "0.53", "Meng15 Table 1"),
+        ("salt: lambda_s", "grains[2].lambda_s", "1.00", "Meng15 Table 1"),
+        ("sand: beta", "grains[3].beta", "0.63", "Meng15 Table 1"),
+        ("sand: lambda_s", "grains[3].lambda_s", "0.50", "Meng15 Table 1"),
+        ("snow: beta", "grains[4].beta", "0.65", "Meng15 Table 1"),
+        ("snow: lambda_s", "grains[4].lambda_s", "1.40", "Meng15 Table 1"),
+        ("sugar: beta", "grains[5].beta", "0.71", "Meng15 Table 1"),
+        ("sugar: lambda_s", "grains[5].lambda_s", "1.17", "Meng15 Table 1"),
+        ("brown-sugar: beta", "grains[6].beta", "0.71", "Meng15 Table 1"),
+        ("brown-sugar: lambda_s", "grains[6].lambda_s", "0.88", "Meng15 Table 1"),
     ],
     "grain_stats": [
-        ("beta", "beta", "", "Meng15 Table 1 columns"),
-        ("lambda_s", "lambda_s", "", ""),
-        ("alpha_s", "alpha_s", "", ""),
+        ("glass bead: beta", "beta", "1.00", "Meng15 Table 1 (glass beads)"),
+        ("lambda_delta", "lambda_delta", "0.00", "Meng15 Table 1"),
+        ("lambda_s", "lambda_s", "1.44", "Meng15 Table 1 (our ior 1.5 vs ~1.46)"),
+        ("alpha_s", "alpha_s", "1.00", "Meng15 Table 1"),
         ("g", "g", "", ""),
     ],
     "meng15_fig9_fluence": [
-        ("agreement better at 15 mfp than at 7.5 mfp", "agreement_better_at_15_mfp", "true", "Meng15 Fig. 9"),
+        ("glass: L1(EPT, VPT) at 7.5 mfp", "glass-bead_L1_7_5", "", "Meng15 Fig. 9"),
+        ("glass: L1 at 15 mfp", "glass-bead_L1_15", "smaller than at 7.5 mfp", "Meng15 Fig. 9"),
+        ("snow: L1 at 7.5 mfp", "snow_L1_7_5", "", "Meng15 Fig. 9"),
+        ("snow: L1 at 15 mfp", "snow_L1_15", "smaller than at 7.5 mfp", "Meng15 Fig. 9"),
+        ("agreement better at 15 mfp", "agreement_better_at_15_mfp", "true", "Meng15 Fig. 9"),
     ],
     "meng15_hybrid_convergence": [
-        ("d_DA", "d_DA", "", "Meng15 Eq. 5"),
+        ("speedup EPT+VPT (P_a = 1)", "ept_vpt_pa_1_speedup", "2.1-30x", "Meng15 Table 2"),
+        ("speedup EPT+VPT+DA (P_a = 1)", "ept_vpt_da_pa_1_speedup", "up to 260x", "Meng15 Table 2"),
+        ("speedup EPT+VPT (P_a optimal)", "ept_vpt_pa_opt_speedup", "2.2-101x", "Meng15 Table 2"),
+        ("rel. difference EPT+VPT+DA vs EPT", "ept_vpt_da_pa_1_rel_diff", "0 within noise", "same image"),
+        ("d_DA [R]", "d_DA", "", "Meng15 Sec. 5"),
     ],
     "packing": [
         ("fraction reached", "fraction", "0.63 requested", "Skoge et al. 2006 MD"),
@@ -167,11 +197,11 @@ KEYS = {
         ("Dixmier mean chord", "dixmier_mean_chord", "", "closed form"),
     ],
     "wang18_point_based": [
-        ("MSE-type error vs VPT (rmse)", "pb_error_rmse", "2.9e-4 .. 1.3e-3 (MSE)", "Wang18 Table 3"),
-        ("single scattering rel. diff.", "rel_diff_single", "", ""),
-        ("double scattering rel. diff.", "rel_diff_double", "", ""),
-        ("multiple scattering rel. diff.", "rel_diff_multiple", "", ""),
-        ("speedup at equal error", "speedup_equal_error", "", "Wang18 Table 3"),
+        ("single scattering rel. diff. vs VPT", "rel_diff_single", "", "Wang18 Eq. 5 vs reference"),
+        ("double scattering rel. diff.", "rel_diff_double", "", "Wang18 Eq. 6"),
+        ("multiple scattering rel. diff.", "rel_diff_multiple", "", "Wang18 Eq. 7 (table)"),
+        ("RMSE point-based vs VPT", "pb_error_rmse", "MSE 2.9e-4 .. 1.3e-3", "Wang18 Table 3"),
+        ("speedup at equal error", "speedup_equal_error", "11x-360x vs UPBP", "Wang18 Table 3"),
     ],
     "moon07_shell_transport": [
         ("max MSD rel. difference shells vs explicit", "max_msd_rel_diff", "shells reproduce explicit paths",
@@ -214,7 +244,10 @@ def last_json(text):
 
 
 def lookup(obj, path):
-    """Follow a path like 'a.b[2]' into nested dicts/lists; None when it is not there."""
+    """Follow a path like 'a.b[2]' into nested dicts/lists; None when it is not there. A key that
+    itself holds dots (e.g. "energy_r0.1") is matched whole first."""
+    if isinstance(obj, dict) and path in obj:
+        return obj[path]
     for part in re.findall(r"[^.\[\]]+|\[\d+\]", path):
         if part.startswith("["):
             i = int(part[1:-1])
@@ -352,13 +385,14 @@ def render(out_dir, repo=None, quality=None):
 
     o.append("<nav><ul>\n")
     for key, title, _ in sections:
-        o.append("<li><a href=\"#paper-%s\"><b>%s</b></a></li>\n" % (e(key), e(title.split(",")[0])))
+        o.append("<li><a href=\"#paper-%s\"><b>%s</b></a></li>\n" % (e(key), e(SHORT.get(key, key))))
         for ex in by_paper[key]:
             o.append("<li><a href=\"#%s\">%s</a></li>\n" % (e(ex.name), e(ex.name)))
     if loose_pngs:
         o.append("<li><a href=\"#loose\">other images</a></li>\n")
     o.append("</ul></nav>\n")
 
+    o.append(overview(sections, by_paper))
     for key, title, doc in sections:
         o.append("<h2 id=\"paper-%s\">%s</h2>\n" % (e(key), e(title)))
         if doc and repo and os.path.exists(os.path.join(repo, doc)):
@@ -372,6 +406,32 @@ def render(out_dir, repo=None, quality=None):
             o.append(figure(out_dir, p))
         o.append("</div>\n")
     o.append("</body>\n</html>\n")
+    return "".join(o)
+
+
+def overview(sections, by_paper):
+    """One row per program: paper, status, time and its first key numbers beside the paper's."""
+    e = html.escape
+    o = ["<h2 id=\"overview\">Overview</h2>\n<table>\n<tr><th>program</th><th>paper</th><th>status</th>"
+         "<th>key numbers: ours (paper / reference)</th></tr>\n"]
+    for key, _, _ in sections:
+        for ex in by_paper[key]:
+            parts = ex.status.split()
+            if ex.status.startswith("ok"):
+                status = "<span class=\"ok\">ok</span>" + (" %s s" % e(parts[1]) if len(parts) > 1 else "")
+            else:
+                status = "<span class=\"failed\">%s</span>" % e(ex.status or "no status")
+            cells = []
+            if ex.summary is not None:
+                rows = KEYS.get(ex.name)
+                if rows is None:
+                    rows = default_table(ex.summary)
+                for label, path, ref, _ in [r for r in rows if r[2]][:2] or rows[:2]:
+                    v = fmt(lookup(ex.summary, path))
+                    cells.append("%s: <b>%s</b>%s" % (e(label), e(v), " (%s)" % e(ref) if ref else ""))
+            o.append("<tr><td><a href=\"#%s\">%s</a></td><td>%s</td><td>%s</td><td>%s</td></tr>\n"
+                     % (e(ex.name), e(ex.name), e(SHORT.get(key, key)), status, "<br>".join(cells)))
+    o.append("</table>\n")
     return "".join(o)
 
 

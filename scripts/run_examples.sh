@@ -72,7 +72,13 @@ fi
 echo "examples took $(( $(date +%s) - job_t0 )) s" >&2
 # The results page (Debian's python: standard library only). Written even when an example failed.
 if [ -x /usr/bin/python3 ]; then
-  /usr/bin/python3 scripts/make_results_page.py "$OUT" --quality "$QUALITY" || echo "results page not written" >&2
+  if /usr/bin/python3 scripts/make_results_page.py "$OUT" --quality "$QUALITY"; then
+    # Every image and link on the page must resolve, every PNG must be on it.
+    /usr/bin/python3 tests/results_page/check_results_page.py --page "$OUT" >&2 || failed+=("results_page")
+  else
+    echo "results page not written" >&2
+    failed+=("results_page")
+  fi
 else
   echo "note: /usr/bin/python3 not found; $OUT/index.html not written" >&2
 fi

@@ -108,7 +108,7 @@ def make_synthetic(out):
     write(os.path.join(mf, "fluence.csv"), "d,L1\n7.5,0.07\n")
     # A program the generator has no KEYS for, with nested JSON.
     write(os.path.join(out, "new_program", "stdout.txt"),
-          json.dumps({"score": 1.5, "nested": {"a": [1, 2]}, "ok": True}) + "\n")
+          json.dumps({"score": 1.5, "energy_r0.1": 0.25, "nested": {"a": [1, 2]}, "ok": True}) + "\n")
     write(os.path.join(out, "new_program", "status.txt"), "ok 1\n")
     tiny_png(os.path.join(out, "new_program", "plot.png"))
     # A failed program: no JSON on the last line.
@@ -134,7 +134,7 @@ def self_test(generator):
         text = " ".join(p.text)
         # Key numbers from the JSON beside the paper's values, the command, the status.
         for needle in ["0.264912", "0.26421", "build/release/bin/slab --paths 1000000", "ok in 3 s",
-                       "agreement better at 15 mfp", "true", "score", "1.5",
+                       "agreement better at 15 mfp", "true", "score", "1.5", "0.25",
                        "no JSON summary on the last stdout line", "failed 1 2"]:
             if needle not in text:
                 failures.append("page text lacks %r" % needle)
