@@ -144,8 +144,8 @@ py::dict bulk_to_dict(const grainlight::BulkOptics& b) {
     Array theta(std::vector<py::ssize_t>{py::ssize_t(nt)});
     std::copy(b.theta.begin(), b.theta.end(), theta.mutable_data());
     Array phase(std::vector<py::ssize_t>{py::ssize_t(nw), py::ssize_t(nt)});
-    Array wl({py::ssize_t(nw)}), st({py::ssize_t(nw)}), ss({py::ssize_t(nw)}), sa({py::ssize_t(nw)}),
-        g({py::ssize_t(nw)}), ct({py::ssize_t(nw)}), cs({py::ssize_t(nw)});
+    const auto n_wl = py::ssize_t(nw);
+    Array wl(n_wl), st(n_wl), ss(n_wl), sa(n_wl), g(n_wl), ct(n_wl), cs(n_wl);
     for (std::size_t c = 0; c < nw; ++c) {
         const auto& ch = b.channels[c];
         wl.mutable_data()[c] = ch.wavelength_um;
