@@ -14,10 +14,12 @@ PACKAGES=(
   catch2 libbenchmark-dev
   python3-matplotlib
 )
-# Optional: the Python module (pybind11 + numpy, tested with pytest) and the Embree adapter.
+# Optional: the Python module (pybind11 + numpy, tested with pytest), the Embree adapter and the
+# API reference (doxygen).
 OPTIONAL_PACKAGES=(
   pybind11-dev python3-dev python3-numpy python3-pytest
   libembree-dev
+  doxygen
 )
 if [ "${GRAINLIGHT_OPTIONAL:-1}" = "0" ]; then OPTIONAL_PACKAGES=(); fi
 

@@ -54,8 +54,8 @@ struct EmbreeGrainRecord {
 /// The extended intersect context: Embree passes it to the callbacks unchanged. `records` has one
 /// entry per ray of the call (1 for rtcIntersect1, the packet width for packets) or is null.
 struct EmbreeGrainContext {
-    RTCIntersectContext context;  // must stay the first member
-    EmbreeGrainRecord* records = nullptr;
+    RTCIntersectContext context;            ///< Embree's context (must stay the first member)
+    EmbreeGrainRecord* records = nullptr;  ///< one record per ray of the call, or null
 };
 
 /// Initialize an extended context (rtcInitIntersectContext + the record pointer).
