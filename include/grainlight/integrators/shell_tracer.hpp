@@ -32,6 +32,7 @@
 #include "grainlight/core/rng.hpp"
 #include "grainlight/core/spectrum.hpp"
 #include "grainlight/core/statistics.hpp"
+#include "grainlight/geometry/distance.hpp"
 #include "grainlight/integrators/walk.hpp"
 #include "grainlight/media/concepts.hpp"
 #include "grainlight/media/continuous.hpp"
@@ -40,16 +41,6 @@
 #include "grainlight/scene/slab.hpp"
 
 namespace grainlight {
-
-/// Distance from p to the faces of the slab -thickness < z < 0 (negative outside; thickness may
-/// be +inf for a half-space).
-struct SlabDistance {
-    double thickness = 1.0;
-    [[nodiscard]] double operator()(const Vec3d& p) const noexcept {
-        const double top = -p.z;
-        return std::isfinite(thickness) ? std::min(top, p.z + thickness) : top;
-    }
-};
 
 /// Step counts of a walk through a ShellSwitchMedium.
 struct ShellSwitchStats {
