@@ -14,6 +14,8 @@
 ///     Sec. 5.1.5), found by branch-and-bound over a bounding-box tree of the triangles; the sign
 ///     comes from MeshBoundary's ray-parity inside test (its triangle BVH, geometry/bvh.hpp).
 ///     `nearest(p)` also returns the nearest point and triangle.
+/// Each also has `exit_distance(p, w)`: the distance along the unit direction w from p to the
+/// first surface crossing (the "distance to surface along omega" of Moon07 Fig. 5).
 /// Queries are const, thread-safe, allocation-free and noexcept; constructors validate.
 #pragma once
 
@@ -28,6 +30,7 @@
 #include "grainlight/core/error.hpp"
 #include "grainlight/core/vector.hpp"
 #include "grainlight/geometry/aabb.hpp"
+#include "grainlight/geometry/bvh.hpp"
 #include "grainlight/geometry/triangle_mesh.hpp"
 #include "grainlight/geometry/voxelized_boundary.hpp"
 
@@ -49,6 +52,12 @@ struct SphereDistance {
         check_argument(std::isfinite(c.x + c.y + c.z), "SphereDistance", "center", c.x + c.y + c.z, "finite");
     }
     [[nodiscard]] double operator()(const Vec3d& p) const noexcept { return radius - glm::length(p - center); }
+    /// Distance along unit w from p (inside) to the surface (0 if p is outside and w points away).
+    [[nodiscard]] double exit_distance(const Vec3d& p, const Vec3d& w) const noexcept {
+        const Vec3d rel = p - center;
+        const double b = glm::dot(rel, w), c = glm::dot(rel, rel) - radius * radius;
+        return std::max(0.0, -b + std::sqrt(std::max(0.0, b * b - c)));
+    }
 };
 
 /// Signed distance to the surface of the axis-aligned box [lo, hi] (positive inside).
@@ -71,6 +80,15 @@ struct BoxDistance {
         }
         return outside ? -std::sqrt(out2) : inside;
     }
+    /// Distance along unit w from p (inside) to the surface where the ray leaves the box.
+    [[nodiscard]] double exit_distance(const Vec3d& p, const Vec3d& w) const noexcept {
+        double t = std::numeric_limits<double>::infinity();
+        for (int a = 0; a < 3; ++a) {
+            if (w[a] > 0) t = std::min(t, (hi[a] - p[a]) / w[a]);
+            if (w[a] < 0) t = std::min(t, (lo[a] - p[a]) / w[a]);
+        }
+        return std::max(0.0, t);
+    }
 };
 
 /// Signed distance to the faces of the slab -thickness < z < 0 (thickness > 0, may be +inf:
@@ -80,6 +98,12 @@ struct SlabDistance {
     [[nodiscard]] double operator()(const Vec3d& p) const noexcept {
         const double top = -p.z;
         return std::isfinite(thickness) ? std::min(top, p.z + thickness) : top;
+    }
+    /// Distance along unit w from p (inside) to the face the ray leaves through (+inf if parallel).
+    [[nodiscard]] double exit_distance(const Vec3d& p, const Vec3d& w) const noexcept {
+        if (w.z > 0) return std::max(0.0, -p.z / w.z);
+        if (w.z < 0 && std::isfinite(thickness)) return std::max(0.0, (-thickness - p.z) / w.z);
+        return std::numeric_limits<double>::infinity();
     }
 };
 
@@ -164,7 +188,18 @@ public:
             d->ids[i] = order[i];
         }
         d->tris = std::move(tris);
+        TriangleMesh<double> md;
+        md.vertices.reserve(mesh.vertices.size());
+        for (const auto& v : mesh.vertices) md.vertices.emplace_back(Vec3d(v));
+        md.triangles = mesh.triangles;
+        d->bvh = Bvh<double>(md);
         data_ = std::move(d);
+    }
+
+    /// Distance along unit w from p to the first surface crossing (+inf if none).
+    [[nodiscard]] double exit_distance(const Vec3d& p, const Vec3d& w) const noexcept {
+        const TriangleHit<double> h = data_->bvh.intersect(p, w, 0.0, std::numeric_limits<double>::infinity());
+        return h ? h.t : std::numeric_limits<double>::infinity();
     }
 
     /// Nearest point of the surface to p (exact over all triangles).
@@ -230,6 +265,7 @@ private:
         std::vector<Node> nodes;
         std::vector<std::array<Vec3d, 3>> tris;
         std::vector<std::uint32_t> ids;
+        Bvh<double> bvh;  ///< ray queries (exit_distance)
     };
 
     // Median split on the largest centroid axis; children of a node are stored next to each other.

@@ -13,7 +13,8 @@
 ///     walk kernel (integrators/walk.hpp) to check the shell machinery against transport theory.
 ///   - `ShellSlab`: the plane-parallel slab of scene/slab.hpp (same parameters and estimator)
 ///     solved by shell stepping: `slab --method shells`.
-///   - `ShellTracer`: the Fig. 6 integrator for discrete media (see its comment).
+///   - `ShellTracer`: the Fig. 6 integrator for the high-order part of paths in a discrete
+///     medium (switch rule, both shadow rays, the exit rule; see its comment).
 ///
 /// Kernel rules: no allocation, exceptions or virtual calls per sample; randomness from `rng`.
 #pragma once
@@ -37,6 +38,7 @@
 #include "grainlight/media/concepts.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/media/shell.hpp"
+#include "grainlight/scene/concepts.hpp"
 #include "grainlight/phase/henyey_greenstein.hpp"
 #include "grainlight/scene/slab.hpp"
 
@@ -177,5 +179,125 @@ private:
     SlabProblem problem_;
     SceneType scene_;
 };
+
+/// Options of the Fig. 6 shell tracer.
+struct ShellTracerOptions {
+    int min_scatter = 2;        ///< explicit events before a path may switch to shells (switch rule)
+    double switch_depth = -1;   ///< distance to the surface required to switch (< 0: r_0 of the table)
+    bool nee = true;            ///< Fig. 6's two shadow rays (false: count escapes that hit lights)
+    int max_steps = 100000;     ///< shell steps per path at most
+};
+
+/// What a shell-traced path did (for statistics).
+struct ShellTraceStats {
+    std::uint64_t paths = 0, steps = 0, scattered = 0, exits = 0, straight_escapes = 0;
+};
+
+/// Moon07 Fig. 6 (advanceRayUsingShellsWithDirect) as an integrator for the high-order part of a
+/// path inside a homogeneous discrete random medium:
+///   - `Volume`: the medium's volume; signed distance `double operator()(Vec3d)` (>= 0 inside,
+///     geometry/distance.hpp) picks the largest shell that fits (else r_0), and
+///     `exit_distance(p, w)` is the "distance to surface along omega";
+///   - `Env` (the scene outside the medium): `LightSample<double, S> sample_light(p, Vec3d u)`
+///     (pick a light and a point on it, solid-angle pdf), `bool visible(p, w, dist)` (no blocker
+///     between p and the light point; the medium itself is accounted for by the shells) and
+///     `S escape(const Ray<double>&)` (radiance arriving along a ray leaving the volume: a light
+///     it hits, or the environment).
+/// From the switch point (x, omega) the path takes Fig. 5 steps. With `nee`, at every step the
+/// first shadow ray adds L p_r(y = x_l) (ShellMedium::exit_escape_density) and after every
+/// scattered step the second adds L p_r(w_l | x_{i+1}) T (straight_escape_density); then exits
+/// outside the volume and straight escapes along a direction set by a scattered step are not
+/// counted again (they are what the shadow rays estimate); a straight escape along the switch
+/// direction is counted through `escape`. Without `nee` every escape is followed by `escape`
+/// (exits leave along y - x, the paper's exit rule): the analog estimator the shadow rays
+/// replace. Both estimate the same expectation (tests/shells/test_shell_tracer.cpp).
+template <class S, class Volume>
+class ShellTracer {
+public:
+    using Shells = ShellMedium<double, S, Volume>;
+
+    ShellTracer(ShellTable table, Volume volume, ShellTracerOptions opt = {})
+        : shells_(std::move(table), volume, /*analog_absorption*/ false), volume_(std::move(volume)), opt_(opt) {
+        check_argument(opt.min_scatter >= 0, "ShellTracer", "min_scatter", opt.min_scatter, ">= 0");
+        check_argument(opt.max_steps >= 1, "ShellTracer", "max_steps", opt.max_steps, ">= 1");
+        check_argument(!std::isnan(opt.switch_depth), "ShellTracer", "switch_depth", opt.switch_depth,
+                       "a number (< 0: r_0 of the table)");
+        switch_depth_ = opt.switch_depth < 0 ? shells_.table().radii.front() : opt.switch_depth;
+    }
+
+    [[nodiscard]] const Shells& shells() const noexcept { return shells_; }
+    [[nodiscard]] const Volume& volume() const noexcept { return volume_; }
+    [[nodiscard]] const ShellTracerOptions& options() const noexcept { return opt_; }
+    [[nodiscard]] double switch_depth() const noexcept { return switch_depth_; }
+
+    /// The switch rule (Sec. 4.2): at least min_scatter explicit events and at least the switch
+    /// depth (default r_0) inside the volume.
+    [[nodiscard]] bool may_switch(const Vec3d& p, int events) const noexcept {
+        return events >= opt_.min_scatter && volume_(p) >= switch_depth_;
+    }
+
+    /// Radiance gathered by the shell-traced remainder of a path at x (inside) travelling along
+    /// unit omega (Fig. 6), per unit path throughput.
+    template <class Env>
+    [[nodiscard]] S trace(Vec3d x, Vec3d omega, Rng& rng, const Env& env, ShellTraceStats* stats = nullptr) const noexcept {
+        S L(0.0);
+        double beta = 1.0;
+        bool dir_from_scatter = false;
+        if (stats) ++stats->paths;
+        const auto inside = [this](const Vec3d& p) { return !(volume_(p) < 0.0); };
+        for (int k = 0; k < opt_.max_steps; ++k) {
+            const double t_b = volume_.exit_distance(x, omega);
+            if (opt_.nee) {  // first shadow ray: leave through a sampled exit point outside
+                const LightSample<double, S> ls = env.sample_light(x, Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()));
+                if (ls) {
+                    const double dens = shells_.exit_escape_density(x, omega, t_b, ls.w);
+                    if (dens > 0 && env.visible(x, ls.w, ls.dist)) L += ls.L * (beta * dens / ls.pdf);
+                }
+            }
+            const ShellStep<double> st = shells_.step(x, omega, t_b, rng, inside);
+            if (stats) ++stats->steps;
+            switch (st.kind) {
+                case ShellStepKind::straight:
+                    x = st.p;
+                    continue;
+                case ShellStepKind::absorbed:
+                    return L;
+                case ShellStepKind::escaped:
+                    if (stats) ++stats->straight_escapes;
+                    if (!opt_.nee || !dir_from_scatter) L += env.escape(Ray<double>(st.p, omega)) * beta;
+                    return L;
+                case ShellStepKind::exited:
+                    if (stats) ++stats->exits;
+                    if (!opt_.nee) L += env.escape(Ray<double>(st.p, st.w)) * beta;
+                    return L;
+                case ShellStepKind::scattered: {
+                    if (stats) ++stats->scattered;
+                    beta *= st.weight;
+                    if (opt_.nee) {  // second shadow ray: continue along w_l and leave unscattered
+                        const LightSample<double, S> ls = env.sample_light(st.p, Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()));
+                        if (ls) {
+                            const double d_l = volume_.exit_distance(st.p, ls.w);
+                            const double dens = shells_.straight_escape_density(st.shell, x, omega, st.p, ls.w, d_l);
+                            if (dens > 0 && env.visible(st.p, ls.w, ls.dist)) L += ls.L * (beta * dens / ls.pdf);
+                        }
+                    }
+                    x = st.p;
+                    omega = st.w;
+                    dir_from_scatter = true;
+                    if (!(beta > 0)) return L;
+                    continue;
+                }
+            }
+        }
+        return L;
+    }
+
+private:
+    Shells shells_;
+    Volume volume_;
+    ShellTracerOptions opt_;
+    double switch_depth_ = 0;
+};
+
 
 }  // namespace grainlight
