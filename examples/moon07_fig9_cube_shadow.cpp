@@ -7,7 +7,8 @@
 //
 //   moon07_fig9_cube_shadow [--quality quick|full] [--out DIR] [--seed S] [--threads N]
 //        [--spheres N] [--fraction F] [--width W] [--spp-pt N] [--spp-low N] [--spp-high N]
-//        [--batches B] [--min-scatter K] [--shell-paths N] [--shell-radii N] [--rebuild-table]
+//        [--batches B] [--min-scatter K] [--switch-depth D] [--light-size S] [--shell-paths N]
+//        [--shell-radii N] [--rebuild-table]
 //
 // Scene (units: the sphere radius R = 1): N equal glass spheres (eta = 1.5, no absorption) at
 // packing fraction f by random sequential addition (packing/poisson.hpp; paper: 120 000
@@ -300,6 +301,7 @@ int main(int argc, char** argv) {
             .option("light-size", "side of the square light / L (paper: 'small')", "0.12")
             .option("batches", "independent batches per image (>= 4)", "8")
             .option("min-scatter", "switch rule: explicit interface events before shells", "3")
+            .option("switch-depth", "switch rule: depth below the cube surface to switch (R; default r_0 = 2)", "2")
             .option("shell-paths", "paths of the shell precomputation", "20000 quick, 500000 full")
             .option("shell-radii", "number of shell radii (paper: 12-16)", "8 quick, 12 full")
             .option("rebuild-table", "ignore a cached shell table in --out")
@@ -330,6 +332,9 @@ int main(int argc, char** argv) {
         if (spp_pt < 1 || spp_low < 1 || spp_high < 1) throw gl_examples::cli_error("--spp-* must be >= 1");
         if (n_radii < 2 || n_radii > 64) throw gl_examples::cli_error("--shell-radii must be in [2, 64]");
         if (shell_paths < 1000) throw gl_examples::cli_error("--shell-paths must be >= 1000");
+        const double switch_depth = cli.num("switch-depth", 2.0);
+        if (!(switch_depth >= 0 && switch_depth < 1e6))
+            throw gl_examples::cli_error("--switch-depth = " + std::to_string(switch_depth) + " must be in [0, 1e6)");
         const std::filesystem::path out = cli.out_dir("out/moon07_fig9_cube_shadow");
         const auto wall0 = std::chrono::steady_clock::now();
 
@@ -388,6 +393,7 @@ int main(int argc, char** argv) {
 
         gl::ShellTracerOptions to;
         to.min_scatter = min_scatter;
+        to.switch_depth = switch_depth;
         const gl::ShellTracer<S1, gl::BoxDistance> tracer(table, scene.cube, to);
 
         // --- camera; pixels that see the cube ---
@@ -509,6 +515,8 @@ int main(int argc, char** argv) {
             .num("ttuv_ratio", ttuv_ratio)
             .num("rmse_shells_pixelwise", std::sqrt(mse_sh_pixelwise))
             .num("paper_speedup", 16.0)
+            .integer("min_scatter", min_scatter)
+            .num("switch_depth", to.switch_depth)
             .integer("spheres", (long long)kept.size())
             .num("cube_side_R", L)
             .integer("cube_pixels", (long long)n_mask)
