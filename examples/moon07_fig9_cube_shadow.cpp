@@ -58,6 +58,10 @@
 #include "grainlight/scene/image_io.hpp"
 #include "grainlight/scene/lights.hpp"
 
+#if defined(_OPENMP)
+#include <omp.h>
+#endif
+
 namespace gl = grainlight;
 using gl::Vec3d;
 using S1 = gl::Spectrum<1, double>;
@@ -138,7 +142,7 @@ struct CubeScene {
     /// fires. High: 0 unless the switch rule fires, then the shell tracer's radiance.
     template <class Tracer>
     [[nodiscard]] double radiance(gl::Ray<double> r, gl::Rng& rng, Mode mode, const Tracer* tracer,
-                                  std::uint64_t* events_out = nullptr) const noexcept {
+                                  std::uint64_t* events_out = nullptr, gl::ShellTraceStats* ts = nullptr) const noexcept {
         Vec3d p = r.o, d = r.d;
         bool in_cube = false, in_glass = false, has_last = false;
         Vec3d c(0.0);
@@ -206,7 +210,7 @@ struct CubeScene {
                     if (tracer->may_switch(x, events)) {
                         if (events_out) *events_out += std::uint64_t(events);
                         if (mode == Mode::low) return 0.0;
-                        return tracer->trace(x, d, rng, *this)[0];
+                        return tracer->trace(x, d, rng, *this, ts)[0];
                     }
                 }
             }
@@ -421,10 +425,27 @@ int main(int argc, char** argv) {
                                               [&](const gl::Ray<double>& r, gl::Rng& rng) {
                                                   return scene.radiance(r, rng, Mode::low, &tracer);
                                               });
+        // Per-thread tallies of the shell-traced parts (summed after the render).
+        std::vector<gl::ShellTraceStats> tstats(256);
         const BatchImages hi = render_batches(cam, spp_high, B, seed + 2, threads, "fig9 high order (shells)",
                                               [&](const gl::Ray<double>& r, gl::Rng& rng) {
-                                                  return scene.radiance(r, rng, Mode::high, &tracer);
+#if defined(_OPENMP)
+                                                  const int tid = std::min(255, omp_get_thread_num());
+#else
+                                                  const int tid = 0;
+#endif
+                                                  return scene.radiance(r, rng, Mode::high, &tracer, nullptr,
+                                                                        &tstats[std::size_t(tid)]);
                                               });
+        gl::ShellTraceStats ts;
+        for (const auto& t : tstats) {
+            ts.paths += t.paths;
+            ts.steps += t.steps;
+            ts.scattered += t.scattered;
+            ts.exits += t.exits;
+            ts.straight_escapes += t.straight_escapes;
+        }
+        const double high_samples = double(spp_high) * B * double(n_mask);
 
         // --- statistics over the cube pixels ---
         const std::size_t NP = std::size_t(W) * std::size_t(H);
@@ -515,6 +536,9 @@ int main(int argc, char** argv) {
             .num("ttuv_ratio", ttuv_ratio)
             .num("rmse_shells_pixelwise", std::sqrt(mse_sh_pixelwise))
             .num("paper_speedup", 16.0)
+            .num("switched_fraction", double(ts.paths) / high_samples)
+            .num("shell_steps_per_switched_path", ts.paths ? double(ts.steps) / double(ts.paths) : 0.0)
+            .num("exit_fraction", ts.paths ? double(ts.exits) / double(ts.paths) : 0.0)
             .integer("min_scatter", min_scatter)
             .num("switch_depth", to.switch_depth)
             .integer("spheres", (long long)kept.size())
