@@ -308,6 +308,7 @@ int main(int argc, char** argv) {
             .option("switch-depth", "switch rule: depth below the cube surface to switch (R; default r_0 = 2)", "2")
             .option("shell-paths", "paths of the shell precomputation", "20000 quick, 500000 full")
             .option("shell-radii", "number of shell radii (paper: 12-16)", "8 quick, 12 full")
+            .option("shell-r0", "smallest shell radius r_0 (R; the correlation length)", "2")
             .option("rebuild-table", "ignore a cached shell table in --out")
             .common_options("out/moon07_fig9_cube_shadow");
         cli.finish();
@@ -336,6 +337,9 @@ int main(int argc, char** argv) {
         if (spp_pt < 1 || spp_low < 1 || spp_high < 1) throw gl_examples::cli_error("--spp-* must be >= 1");
         if (n_radii < 2 || n_radii > 64) throw gl_examples::cli_error("--shell-radii must be in [2, 64]");
         if (shell_paths < 1000) throw gl_examples::cli_error("--shell-paths must be >= 1000");
+        const double shell_r0 = cli.num("shell-r0", 2.0);
+        if (!(shell_r0 > 0 && shell_r0 < 1e6))
+            throw gl_examples::cli_error("--shell-r0 = " + std::to_string(shell_r0) + " must be in (0, 1e6)");
         const double switch_depth = cli.num("switch-depth", 2.0);
         if (!(switch_depth >= 0 && switch_depth < 1e6))
             throw gl_examples::cli_error("--switch-depth = " + std::to_string(switch_depth) + " must be in [0, 1e6)");
@@ -361,7 +365,7 @@ int main(int argc, char** argv) {
 
         // --- shell table from the same random process (cached) ---
         std::vector<double> radii(static_cast<std::size_t>(n_radii), 0.0);
-        const double r0 = 2 * R, r_max = 0.45 * L;
+        const double r0 = shell_r0 * R, r_max = 0.45 * L;
         for (int i = 0; i < n_radii; ++i) radii[std::size_t(i)] = r0 + (r_max - r0) * double(i) / double(n_radii - 1);
         gl::ShellBuildOptions bo;
         bo.n_c = full ? 50 : 24;
@@ -371,7 +375,7 @@ int main(int argc, char** argv) {
         const std::string key = std::to_string(n_spheres) + "_" + std::to_string(int(fraction * 1000)) + "_" +
                                 std::to_string(shell_paths) + "_" + std::to_string(n_radii) + "_" +
                                 std::to_string(bo.n_c) + "x" + std::to_string(bo.n_u) + "x" + std::to_string(bo.n_v) +
-                                "_s" + std::to_string(seed);
+                                "_r" + std::to_string(int(shell_r0 * 100)) + "_s" + std::to_string(seed);
         const std::filesystem::path table_path = out / ("moon07_fig9_" + key + ".shel");
         gl::ShellTable table;
         double build_seconds = 0, nmf_error = -1;
