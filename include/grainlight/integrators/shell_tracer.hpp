@@ -3,7 +3,7 @@
 /// EGSR 2007, Secs. 4.2-4.3, Figs. 5-7): paths are traced exactly near the surface of a medium
 /// and advance by the largest precomputed shell that fits around them in its interior.
 ///
-/// Two pieces:
+/// Three pieces:
 ///   - `ShellSwitchMedium<Exact, Boundary>`: a Medium (media/concepts.hpp) that takes a Fig. 5
 ///     shell step from every point whose distance to the medium surface (the `Boundary` query,
 ///     e.g. geometry/distance.hpp) is at least the smallest shell radius r_0, and an exact step of
@@ -38,8 +38,8 @@
 #include "grainlight/media/concepts.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/media/shell.hpp"
-#include "grainlight/scene/concepts.hpp"
 #include "grainlight/phase/henyey_greenstein.hpp"
+#include "grainlight/scene/concepts.hpp"
 #include "grainlight/scene/slab.hpp"
 
 namespace grainlight {
