@@ -310,6 +310,7 @@ int main(int argc, char** argv) {
             .option("shell-radii", "number of shell radii (paper: 12-16)", "8 quick, 12 full")
             .option("shell-r0", "smallest shell radius r_0 (R; the correlation length)", "2")
             .option("rebuild-table", "ignore a cached shell table in --out")
+            .option("no-nee", "high order without Fig. 6's shadow rays (count escapes that hit the light)")
             .common_options("out/moon07_fig9_cube_shadow");
         cli.finish();
         const bool full = cli.full_quality();
@@ -402,6 +403,7 @@ int main(int argc, char** argv) {
         gl::ShellTracerOptions to;
         to.min_scatter = min_scatter;
         to.switch_depth = switch_depth;
+        to.nee = !cli.has("no-nee");
         const gl::ShellTracer<S1, gl::BoxDistance> tracer(table, scene.cube, to);
 
         // --- camera; pixels that see the cube ---
