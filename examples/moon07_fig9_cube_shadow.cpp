@@ -84,6 +84,20 @@ struct CubeScene {
     gl::Light<double, S1> light;
     gl::QuadShape<double> blocker;
     int max_events = 100000;
+    bool cut = false;  ///< spheres cut by the cube faces (flat glass faces there) instead of whole ones
+
+    /// Outward normal of the cube face nearest to p.
+    [[nodiscard]] Vec3d face_normal(const Vec3d& p) const noexcept {
+        int best = 0;
+        double dmin = std::numeric_limits<double>::infinity(), sgn = 1;
+        for (int a = 0; a < 3; ++a) {
+            if (p[a] - cube.lo[a] < dmin) { dmin = p[a] - cube.lo[a]; best = a; sgn = -1; }
+            if (cube.hi[a] - p[a] < dmin) { dmin = cube.hi[a] - p[a]; best = a; sgn = 1; }
+        }
+        Vec3d n(0.0);
+        n[best] = sgn;
+        return n;
+    }
     double clock_mean = 2.0;  ///< mean path length between switch candidates (R)
 
     // --- the scene outside the medium (also the Env of the shell tracer) ---
@@ -162,6 +176,23 @@ struct CubeScene {
                 p += tc * d;
                 in_cube = true;
                 has_last = false;
+                if (cut) {  // entering through a cut sphere: flat glass face
+                    const gl::TileHit h = tile.first_hit(gl::Vec3i64{0, 0, 0}, p, d, 0.0, 1e-9);
+                    if (h && h.t_enter < 0) {
+                        const Vec3d n = face_normal(p);
+                        bool refracted = false;
+                        double eta_rel = 1;
+                        d = gl::sample_dielectric(d, n, eta, rng.uniform<double>(), refracted, eta_rel);
+                        ++events;
+                        if (!refracted) {
+                            in_cube = false;
+                            p += 1e-9 * n;
+                            continue;
+                        }
+                        in_glass = true;
+                        c = tile.center(h.sphere) + Vec3d(double(h.tile.x), double(h.tile.y), double(h.tile.z)) * tile.side();
+                    }
+                }
                 continue;
             }
             double t;
@@ -171,6 +202,22 @@ struct CubeScene {
                 const Vec3d rel = p - c;
                 const double b = glm::dot(rel, d), cc = glm::dot(rel, rel) - R * R;
                 t = std::max(0.0, -b + std::sqrt(std::max(0.0, b * b - cc)));
+                if (cut && t_out < t) {  // the flat face of a cut sphere comes first
+                    p += t_out * d;
+                    const Vec3d n = face_normal(p);
+                    bool refracted = false;
+                    double eta_rel = 1;
+                    d = gl::sample_dielectric(d, n, eta, rng.uniform<double>(), refracted, eta_rel);
+                    ++events;
+                    if (refracted) {
+                        in_glass = false;
+                        in_cube = false;
+                        p += 1e-9 * n;
+                    } else {
+                        p -= 1e-9 * n;
+                    }
+                    continue;
+                }
             } else {
                 t = std::numeric_limits<double>::infinity();
                 double t_min = 0;
@@ -310,6 +357,7 @@ int main(int argc, char** argv) {
             .option("shell-radii", "number of shell radii (paper: 12-16)", "8 quick, 12 full")
             .option("shell-r0", "smallest shell radius r_0 (R; the correlation length)", "2")
             .option("rebuild-table", "ignore a cached shell table in --out")
+            .option("cut-spheres", "a cube cut out of the periodic packing (flat glass faces; no sphere-free skin)")
             .option("no-nee", "high order without Fig. 6's shadow rays (count escapes that hit the light)")
             .common_options("out/moon07_fig9_cube_shadow");
         cli.finish();
@@ -361,6 +409,11 @@ int main(int argc, char** argv) {
                                                   Vec3d(0, light_size * L, 0), Vec3d(light_size * L, 0, 0)),
                             S1(0.9 / (light_size * light_size))),
                         gl::QuadShape<double>(Vec3d(-2 * L, -2 * L, 1.5 * L), Vec3d(2.42 * L, 0, 0), Vec3d(0, 5 * L, 0))};
+        if (cli.has("cut-spheres")) {
+            scene.tile = rsa;
+            scene.cut = true;
+            kept = rsa.centers();
+        }
         std::cerr << "moon07_fig9: " << kept.size() << " spheres in a cube of side " << L << " R (f = " << fraction
                   << ")\n";
 
