@@ -30,11 +30,12 @@
 #include <type_traits>
 #include <vector>
 
+#include "grainlight/integrators/shell_tracer.hpp"  // --method shells
+#include "grainlight/precompute/shell_builder.hpp"
+
 #include "common/cli.hpp"
 #include "common/output.hpp"
 #include "common/progress.hpp"
-#include "grainlight/integrators/shell_tracer.hpp"
-#include "grainlight/precompute/shell_builder.hpp"
 #include "grainlight/scene/slab.hpp"
 
 int main(int argc, char** argv) {
