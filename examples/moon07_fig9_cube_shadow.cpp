@@ -1,0 +1,615 @@
+// moon07_fig9_cube_shadow: Moon07 Fig. 9, a cube of Poisson-distributed glass spheres under a
+// small rectangular area light, with a blocker casting a shadow edge across the top face,
+// rendered (a) by path tracing through the explicit spheres and (b) by Moon07's method: a
+// low-order image (explicit path tracing until the switch rule fires) plus a high-order image
+// (explicit tracing to the switch point, then shells with Fig. 6's two shadow rays:
+// integrators/shell_tracer.hpp), and the equal-error speed-up of (b) over (a).
+//
+//   moon07_fig9_cube_shadow [--quality quick|full] [--out DIR] [--seed S] [--threads N]
+//        [--spheres N] [--fraction F] [--width W] [--spp-pt N] [--spp-low N] [--spp-high N]
+//        [--batches B] [--min-scatter K] [--switch-depth D] [--light-size S] [--shell-paths N]
+//        [--shell-radii N] [--rebuild-table]
+//
+// Scene (units: the sphere radius R = 1): N equal glass spheres (eta = 1.5, no absorption) at
+// packing fraction f by random sequential addition (packing/poisson.hpp; paper: 120 000
+// "Poisson distributed" spheres) in a cube of side L = (N 4/3 pi / f)^(1/3) standing on a black
+// floor; a square light of side 0.12 L (--light-size) at height 2.2 L facing down; a black blocker at 1.5 L
+// covering x < 0.42 L. The shell table is precomputed from the same random process (the
+// periodic RSA tile of the cube, SpherePackingShellSource) and cached in DIR.
+//
+// Measurement (../shared/reference/measuring.md): every image is rendered in B batches with
+// different seeds; per pixel the variance of the mean comes from the batches. Over the pixels
+// that see the cube: mean_pt, mean_shells (low + high); rmse_pt = the PT reference's own noise;
+// rmse_shells^2 = its per-pixel variance + the squared bias of the cube mean against PT beyond
+// the noise of both means (the pixel-wise mean (shells - PT)^2 - var(PT) is printed as
+// rmse_shells_pixelwise; at these budgets it is dominated by the reference's noise); speedup_equal_error =
+// seconds_pt rmse_pt^2 / rmse_shells^2 / (seconds_low + seconds_high) (CPU seconds).
+// JSON (last stdout line): seconds_pt, seconds_low, seconds_high, rmse_pt, rmse_shells,
+// speedup_equal_error, mean_pt, mean_shells, bias_rel (+ _se: the exit-rule/shell bias of the
+// mean against PT), table figures; paper: 236 min PT vs 12 + 2.25 min, 16x.
+#include <time.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <iostream>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "common/cli.hpp"
+#include "common/output.hpp"
+#include "common/progress.hpp"
+#include "grainlight/core/rng.hpp"
+#include "grainlight/core/statistics.hpp"
+#include "grainlight/geometry/aabb.hpp"
+#include "grainlight/geometry/distance.hpp"
+#include "grainlight/integrators/render.hpp"
+#include "grainlight/integrators/shell_tracer.hpp"
+#include "grainlight/integrators/walk.hpp"
+#include "grainlight/packing/periodic_tile.hpp"
+#include "grainlight/packing/poisson.hpp"
+#include "grainlight/precompute/shell_builder.hpp"
+#include "grainlight/scene/camera.hpp"
+#include "grainlight/scene/film.hpp"
+#include "grainlight/scene/image_io.hpp"
+#include "grainlight/scene/lights.hpp"
+
+#if defined(_OPENMP)
+#include <omp.h>
+#endif
+
+namespace gl = grainlight;
+using gl::Vec3d;
+using S1 = gl::Spectrum<1, double>;
+
+namespace {
+
+double cpu_seconds() {
+    timespec ts{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+enum class Mode { pt, low, high };
+
+/// The Fig. 9 scene: explicit spheres in the cube, light, blocker, black floor.
+struct CubeScene {
+    double L = 1, eta = 1.5;
+    gl::PeriodicTile tile;  ///< the cube's spheres in a padded tile (images never reach the cube)
+    gl::BoxDistance cube;
+    gl::Light<double, S1> light;
+    gl::QuadShape<double> blocker;
+    int max_events = 100000;
+    bool cut = false;  ///< spheres cut by the cube faces (flat glass faces there) instead of whole ones
+
+    /// Outward normal of the cube face nearest to p.
+    [[nodiscard]] Vec3d face_normal(const Vec3d& p) const noexcept {
+        int best = 0;
+        double dmin = std::numeric_limits<double>::infinity(), sgn = 1;
+        for (int a = 0; a < 3; ++a) {
+            if (p[a] - cube.lo[a] < dmin) { dmin = p[a] - cube.lo[a]; best = a; sgn = -1; }
+            if (cube.hi[a] - p[a] < dmin) { dmin = cube.hi[a] - p[a]; best = a; sgn = 1; }
+        }
+        Vec3d n(0.0);
+        n[best] = sgn;
+        return n;
+    }
+    double clock_mean = 2.0;  ///< mean path length between switch candidates (R)
+
+    // --- the scene outside the medium (also the Env of the shell tracer) ---
+    /// Radiance along a ray outside the cube: the light's front side, else black (blocker,
+    /// floor z = 0, background). `t_cube`: the distance to the cube (inf: ignore it).
+    [[nodiscard]] double outside(const gl::Ray<double>& r, double t_cube, bool& enters) const noexcept {
+        enters = false;
+        if (r.o.z < 0) return 0.0;  // below the floor: absorbed
+        double t_best = t_cube;
+        int what = 0;  // 0 none/cube, 1 light, 2 blocker/floor
+        double t;
+        Vec3d n;
+        if (light.quad.intersect(r, t, n) && t < t_best && glm::dot(r.d, n) < 0) {
+            t_best = t;
+            what = 1;
+        }
+        if (blocker.intersect(r, t, n) && t < t_best) {
+            t_best = t;
+            what = 2;
+        }
+        if (r.d.z < 0 && r.o.z > 0) {
+            const double tf = -r.o.z / r.d.z;
+            if (tf < t_best) {
+                t_best = tf;
+                what = 2;
+            }
+        }
+        if (what == 1) return light.power[0];
+        if (what == 0 && std::isfinite(t_cube)) enters = true;
+        return 0.0;
+    }
+    [[nodiscard]] gl::LightSample<double, S1> sample_light(const Vec3d& p, const Vec3d& u) const noexcept {
+        return light.sample(p, gl::Vec2d(u.x, u.y));
+    }
+    [[nodiscard]] bool visible(const Vec3d& p, const Vec3d& w, double dist) const noexcept {
+        double t;
+        Vec3d n;
+        return !blocker.intersect(gl::Ray<double>(p, w, dist * (1 - 1e-9)), t, n);
+    }
+    [[nodiscard]] S1 escape(const gl::Ray<double>& r) const noexcept {
+        bool enters;
+        return S1(outside(r, std::numeric_limits<double>::infinity(), enters));
+    }
+
+    /// Entry distance of the ray into the cube (inf if it misses).
+    [[nodiscard]] double cube_entry(const gl::Ray<double>& r) const noexcept {
+        const gl::Aabb<double> b(cube.lo, cube.hi);
+        const Vec3d inv(1 / r.d.x, 1 / r.d.y, 1 / r.d.z);
+        double te = 0;
+        if (!gl::intersect_aabb(b, r.o, inv, 1e-9, std::numeric_limits<double>::infinity(), &te))
+            return std::numeric_limits<double>::infinity();
+        return te;
+    }
+
+    /// One camera path. PT: explicit to the end. Low: explicit, stopped (0) when the switch rule
+    /// fires. High: 0 unless the switch rule fires, then the shell tracer's radiance.
+    template <class Tracer>
+    [[nodiscard]] double radiance(gl::Ray<double> r, gl::Rng& rng, Mode mode, const Tracer* tracer,
+                                  std::uint64_t* events_out = nullptr, gl::ShellTraceStats* ts = nullptr) const noexcept {
+        Vec3d p = r.o, d = r.d;
+        bool in_cube = false, in_glass = false, has_last = false;
+        Vec3d c(0.0);
+        int events = 0;
+        double clock = -1;  // path length to the next switch candidate (< 0: draw)
+        const double R = tile.radius();
+        for (int guard = 0; guard < max_events; ++guard) {
+            if (!in_cube) {
+                const gl::Ray<double> ray(p, d);
+                const double tc = cube_entry(ray);
+                bool enters = false;
+                const double Le = outside(ray, tc, enters);
+                if (!enters) {
+                    if (events_out) *events_out += std::uint64_t(events);
+                    return mode == Mode::high ? 0.0 : Le;
+                }
+                p += tc * d;
+                in_cube = true;
+                has_last = false;
+                if (cut) {  // entering through a cut sphere: flat glass face
+                    const gl::TileHit h = tile.first_hit(gl::Vec3i64{0, 0, 0}, p, d, 0.0, 1e-9);
+                    if (h && h.t_enter < 0) {
+                        const Vec3d n = face_normal(p);
+                        bool refracted = false;
+                        double eta_rel = 1;
+                        d = gl::sample_dielectric(d, n, eta, rng.uniform<double>(), refracted, eta_rel);
+                        ++events;
+                        if (!refracted) {
+                            in_cube = false;
+                            p += 1e-9 * n;
+                            continue;
+                        }
+                        in_glass = true;
+                        c = tile.center(h.sphere) + Vec3d(double(h.tile.x), double(h.tile.y), double(h.tile.z)) * tile.side();
+                    }
+                }
+                continue;
+            }
+            double t;
+            bool leaves = false;
+            const double t_out = cube.exit_distance(p, d);
+            if (in_glass) {
+                const Vec3d rel = p - c;
+                const double b = glm::dot(rel, d), cc = glm::dot(rel, rel) - R * R;
+                t = std::max(0.0, -b + std::sqrt(std::max(0.0, b * b - cc)));
+                if (cut && t_out < t) {  // the flat face of a cut sphere comes first
+                    p += t_out * d;
+                    const Vec3d n = face_normal(p);
+                    bool refracted = false;
+                    double eta_rel = 1;
+                    d = gl::sample_dielectric(d, n, eta, rng.uniform<double>(), refracted, eta_rel);
+                    ++events;
+                    if (refracted) {
+                        in_glass = false;
+                        in_cube = false;
+                        p += 1e-9 * n;
+                    } else {
+                        p -= 1e-9 * n;
+                    }
+                    continue;
+                }
+            } else {
+                t = std::numeric_limits<double>::infinity();
+                double t_min = 0;
+                for (int k = 0; k < 4; ++k) {
+                    const gl::TileHit h = tile.first_hit(gl::Vec3i64{0, 0, 0}, p, d, t_min, t_out);
+                    if (!h) break;
+                    const Vec3d cen = tile.center(h.sphere) + Vec3d(double(h.tile.x), double(h.tile.y), double(h.tile.z)) * tile.side();
+                    if (has_last && glm::length(cen - c) < 1e-9 * R && h.t_enter < 1e-7 * R) {
+                        t_min = h.t_exit;
+                        continue;
+                    }
+                    c = cen;
+                    t = std::max(0.0, h.t_enter);
+                    break;
+                }
+                if (!std::isfinite(t)) {
+                    t = t_out;
+                    leaves = true;
+                }
+            }
+            // Switch rule (Moon07 Sec. 4.2): once min_scatter events happened, candidate switch
+            // points arrive along the path length as a Poisson clock (mean spacing clock_mean),
+            // so a switch point is a typical point of the path, like the table's start frames
+            // (SpherePackingShellSource: a random point along each path); the first candidate at
+            // least the switch depth inside the volume switches.
+            if (mode != Mode::pt && tracer && events >= tracer->options().min_scatter) {
+                double along = 0;
+                for (;;) {
+                    if (!(clock >= 0)) clock = gl::sample_exponential(rng.uniform<double>(), 1.0 / clock_mean);
+                    if (along + clock >= t) {
+                        clock -= t - along;
+                        break;
+                    }
+                    along += clock;
+                    clock = -1;
+                    const Vec3d x = p + along * d;
+                    if (tracer->may_switch(x, events)) {
+                        if (events_out) *events_out += std::uint64_t(events);
+                        if (mode == Mode::low) return 0.0;
+                        return tracer->trace(x, d, rng, *this, ts)[0];
+                    }
+                }
+            }
+            if (leaves) {  // leaves the cube (air to air, index matched)
+                p += t_out * d;
+                in_cube = false;
+                continue;
+            }
+            // Interface event at a sphere: Fresnel reflection or refraction.
+            p += t * d;
+            const Vec3d n = glm::normalize(p - c);
+            bool refracted = false;
+            double eta_rel = 1;
+            d = gl::sample_dielectric(d, n, eta, rng.uniform<double>(), refracted, eta_rel);
+            if (refracted) in_glass = !in_glass;
+            has_last = true;
+            ++events;
+        }
+        if (events_out) *events_out += std::uint64_t(events);
+        return 0.0;
+    }
+};
+
+/// Per-pixel batch statistics of B renders.
+struct BatchImages {
+    int W = 0, H = 0, B = 0;
+    std::vector<std::vector<double>> img;  // [batch][pixel]
+    double cpu = 0;
+    [[nodiscard]] double mean(std::size_t i) const {
+        double s = 0;
+        for (const auto& b : img) s += b[i];
+        return s / double(B);
+    }
+    /// Variance of the batch mean at pixel i.
+    [[nodiscard]] double var_mean(std::size_t i) const {
+        const double m = mean(i);
+        double s = 0;
+        for (const auto& b : img) s += (b[i] - m) * (b[i] - m);
+        return s / double(B - 1) / double(B);
+    }
+};
+
+template <class Fn>
+BatchImages render_batches(const gl::PinholeCamera<double>& cam, int spp, int B, std::uint64_t seed, int threads,
+                           const std::string& label, Fn&& fn) {
+    BatchImages out;
+    out.W = cam.width();
+    out.H = cam.height();
+    out.B = B;
+    gl_examples::ProgressBar bar(label, std::uint64_t(B) * std::uint64_t(cam.height()));
+    const double c0 = cpu_seconds();
+    for (int b = 0; b < B; ++b) {
+        gl::RenderOptions ro;
+        ro.spp = spp;
+        ro.seed = seed * 1000003u + std::uint64_t(b);
+        ro.threads = threads;
+        const gl::Film film = gl::render_image(
+            cam, [&](const gl::Ray<double>& r, gl::Rng& rng) { return S1(fn(r, rng)); }, ro,
+            [&](int n) { bar.advance(std::uint64_t(n)); });
+        std::vector<double> v(std::size_t(out.W) * std::size_t(out.H));
+        for (int y = 0; y < out.H; ++y)
+            for (int x = 0; x < out.W; ++x) v[std::size_t(y) * std::size_t(out.W) + std::size_t(x)] = film.value(x, y, 0);
+        out.img.push_back(std::move(v));
+    }
+    bar.done();
+    out.cpu = cpu_seconds() - c0;
+    return out;
+}
+
+void write_image(const std::filesystem::path& dir, const std::string& name, const std::vector<double>& v, int W, int H,
+                 double scale) {
+    gl::Image img(W, H);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x)
+            for (int ch = 0; ch < 3; ++ch) img.at(x, y, ch) = float(v[std::size_t(y) * std::size_t(W) + std::size_t(x)]);
+    gl::write_exr(dir / (name + ".exr"), img);
+    gl::write_png(dir / (name + ".png"), img, {std::log2(scale)});
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    return gl_examples::run_main("moon07_fig9_cube_shadow", [&]() -> int {
+        gl_examples::Cli cli(argc, argv, "moon07_fig9_cube_shadow",
+                             "Moon07 Fig. 9: cube of glass spheres with a shadow edge, path tracing vs low-order PT + shells");
+        cli.option("spheres", "number of glass spheres (paper: 120000)", "15000 quick, 120000 full")
+            .option("fraction", "packing fraction of the RSA spheres, (0, 0.35]", "0.3")
+            .option("width", "image width (height = 3/4 width)", "128 quick, 512 full")
+            .option("spp-pt", "path-tracing samples per pixel per batch", "48 quick, 48 full")
+            .option("spp-low", "low-order samples per pixel per batch", "16 quick, 16 full")
+            .option("spp-high", "high-order (shell) samples per pixel per batch", "8 quick, 8 full")
+            .option("light-size", "side of the square light / L (paper: 'small')", "0.12")
+            .option("batches", "independent batches per image (>= 4)", "8")
+            .option("min-scatter", "switch rule: explicit interface events before shells", "3")
+            .option("switch-depth", "switch rule: depth below the cube surface to switch (R; default r_0 = 2)", "2")
+            .option("shell-paths", "paths of the shell precomputation", "20000 quick, 500000 full")
+            .option("shell-radii", "number of shell radii (paper: 12-16)", "8 quick, 12 full")
+            .option("shell-r0", "smallest shell radius r_0 (R; the correlation length)", "2")
+            .option("rebuild-table", "ignore a cached shell table in --out")
+            .option("cut-spheres", "a cube cut out of the periodic packing (flat glass faces; no sphere-free skin)")
+            .option("no-nee", "high order without Fig. 6's shadow rays (count escapes that hit the light)")
+            .common_options("out/moon07_fig9_cube_shadow");
+        cli.finish();
+        const bool full = cli.full_quality();
+        const std::uint64_t seed = cli.seed();
+        const int threads = cli.threads();
+        const auto n_spheres = std::size_t(cli.integer("spheres", full ? 120000 : 15000));
+        const double fraction = cli.num("fraction", 0.3);
+        const int W = int(cli.integer("width", full ? 512 : 128));
+        const int H = std::max(1, W * 3 / 4);
+        const int spp_pt = int(cli.integer("spp-pt", 48));
+        const int spp_low = int(cli.integer("spp-low", 16));
+        const int spp_high = int(cli.integer("spp-high", 8));
+        const int B = int(cli.integer("batches", 8));
+        const double light_size = cli.num("light-size", 0.12);
+        if (!(light_size > 0 && light_size <= 1))
+            throw gl_examples::cli_error("--light-size = " + std::to_string(light_size) + " must be in (0, 1]");
+        const int min_scatter = int(cli.integer("min-scatter", 3));
+        const std::uint64_t shell_paths = cli.integer("shell-paths", full ? 500000 : 20000);
+        const int n_radii = int(cli.integer("shell-radii", full ? 12 : 8));
+        if (n_spheres < 100) throw gl_examples::cli_error("--spheres = " + std::to_string(n_spheres) + " must be >= 100");
+        if (!(fraction > 0 && fraction <= gl::rsa_max_fraction))
+            throw gl_examples::cli_error("--fraction = " + std::to_string(fraction) + " must be in (0, 0.35]");
+        if (W < 8 || W > 8192) throw gl_examples::cli_error("--width = " + std::to_string(W) + " must be in [8, 8192]");
+        if (B < 4) throw gl_examples::cli_error("--batches = " + std::to_string(B) + " must be >= 4");
+        if (spp_pt < 1 || spp_low < 1 || spp_high < 1) throw gl_examples::cli_error("--spp-* must be >= 1");
+        if (n_radii < 2 || n_radii > 64) throw gl_examples::cli_error("--shell-radii must be in [2, 64]");
+        if (shell_paths < 1000) throw gl_examples::cli_error("--shell-paths must be >= 1000");
+        const double shell_r0 = cli.num("shell-r0", 2.0);
+        if (!(shell_r0 > 0 && shell_r0 < 1e6))
+            throw gl_examples::cli_error("--shell-r0 = " + std::to_string(shell_r0) + " must be in (0, 1e6)");
+        const double switch_depth = cli.num("switch-depth", 2.0);
+        if (!(switch_depth >= 0 && switch_depth < 1e6))
+            throw gl_examples::cli_error("--switch-depth = " + std::to_string(switch_depth) + " must be in [0, 1e6)");
+        const std::filesystem::path out = cli.out_dir("out/moon07_fig9_cube_shadow");
+        const auto wall0 = std::chrono::steady_clock::now();
+
+        // --- the medium: RSA spheres (radius 1) in a periodic cube of side L ---
+        const double L = std::cbrt(double(n_spheres) * 4.0 / 3.0 * gl::pi_v<double> / fraction);
+        gl::Rng prng = gl::Rng::from_key(seed, 0xC0BEu);
+        const gl::PeriodicTile rsa = gl::random_sequential_addition(n_spheres, fraction, prng, L);
+        const double R = rsa.radius();
+        std::vector<Vec3d> kept;
+        for (const Vec3d& c : rsa.centers())
+            if (c.x >= R && c.x <= L - R && c.y >= R && c.y <= L - R && c.z >= R && c.z <= L - R) kept.push_back(c);
+        CubeScene scene{L, 1.5, gl::PeriodicTile(L + 4 * R, R, kept), gl::BoxDistance(Vec3d(0.0), Vec3d(L)),
+                        gl::Light<double, S1>::quad_light(
+                            gl::QuadShape<double>(Vec3d((0.55 - light_size / 2) * L, (0.5 - light_size / 2) * L, 2.2 * L),
+                                                  Vec3d(0, light_size * L, 0), Vec3d(light_size * L, 0, 0)),
+                            S1(0.9 / (light_size * light_size))),
+                        gl::QuadShape<double>(Vec3d(-2 * L, -2 * L, 1.5 * L), Vec3d(2.42 * L, 0, 0), Vec3d(0, 5 * L, 0))};
+        if (cli.has("cut-spheres")) {
+            scene.tile = rsa;
+            scene.cut = true;
+            kept = rsa.centers();
+        }
+        std::cerr << "moon07_fig9: " << kept.size() << " spheres in a cube of side " << L << " R (f = " << fraction
+                  << ")\n";
+
+        // --- shell table from the same random process (cached) ---
+        std::vector<double> radii(static_cast<std::size_t>(n_radii), 0.0);
+        const double r0 = shell_r0 * R, r_max = 0.45 * L;
+        for (int i = 0; i < n_radii; ++i) radii[std::size_t(i)] = r0 + (r_max - r0) * double(i) / double(n_radii - 1);
+        gl::ShellBuildOptions bo;
+        bo.n_c = full ? 50 : 24;
+        bo.n_u = full ? 50 : 16;
+        bo.n_v = full ? 25 : 16;
+        bo.rank = 5;
+        const std::string key = std::to_string(n_spheres) + "_" + std::to_string(int(fraction * 1000)) + "_" +
+                                std::to_string(shell_paths) + "_" + std::to_string(n_radii) + "_" +
+                                std::to_string(bo.n_c) + "x" + std::to_string(bo.n_u) + "x" + std::to_string(bo.n_v) +
+                                "_r" + std::to_string(int(shell_r0 * 100)) + "_s" + std::to_string(seed);
+        const std::filesystem::path table_path = out / ("moon07_fig9_" + key + ".shel");
+        gl::ShellTable table;
+        double build_seconds = 0, nmf_error = -1;
+        bool cached = false;
+        const double b0 = cpu_seconds();
+        if (!cli.has("rebuild-table") && std::filesystem::exists(table_path)) {
+            table = gl::ShellTable::load(table_path);
+            cached = true;
+        } else {
+            const gl::SpherePackingShellSource src(rsa, 1.5, 0.0, 20 * R);
+            const gl::ShellSamples samples = gl::collect_shell_samples(src, radii, shell_paths, seed ^ 0x9u);
+            gl::ShellBuildResult built = gl::build_shell_table(samples, bo);
+            nmf_error = built.nmf_relative_error;
+            table = std::move(built.table);
+            table.save(table_path);
+        }
+        build_seconds = cpu_seconds() - b0;
+        const double raw_bytes = double(table.n_shells()) * bo.n_c * bo.n_u * bo.n_v * sizeof(float);
+        const double factored_bytes = double(table.W.size() + table.H.size() + table.fa.size()) * sizeof(float);
+        std::cerr << "moon07_fig9: shell table " << (cached ? "loaded" : "built") << " (" << build_seconds
+                  << " CPU s), " << table.n_shells() << " radii " << radii.front() << ".." << radii.back()
+                  << " R, raw " << raw_bytes / 1024 << " KiB -> factored " << factored_bytes / 1024 << " KiB\n";
+
+        gl::ShellTracerOptions to;
+        to.min_scatter = min_scatter;
+        to.switch_depth = switch_depth;
+        to.nee = !cli.has("no-nee");
+        const gl::ShellTracer<S1, gl::BoxDistance> tracer(table, scene.cube, to);
+
+        // --- camera; pixels that see the cube ---
+        const gl::PinholeCamera<double> cam(Vec3d(2.2 * L, -1.6 * L, 1.3 * L), Vec3d(0.5 * L, 0.5 * L, 0.42 * L),
+                                            Vec3d(0, 0, 1), 36.0, W, H);
+        std::vector<char> mask(std::size_t(W) * std::size_t(H), 0);
+        std::size_t n_mask = 0;
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
+                const gl::Ray<double> r = cam.generate_ray(x + 0.5, y + 0.5);
+                bool enters = false;
+                (void)scene.outside(r, scene.cube_entry(r), enters);
+                mask[std::size_t(y) * std::size_t(W) + std::size_t(x)] = enters;
+                n_mask += enters;
+            }
+        if (n_mask < 16) throw std::runtime_error("the camera sees fewer than 16 cube pixels");
+
+        // --- renders ---
+        const gl::ShellTracer<S1, gl::BoxDistance>* none = nullptr;
+        const BatchImages pt = render_batches(cam, spp_pt, B, seed, threads, "fig9 path tracing",
+                                              [&](const gl::Ray<double>& r, gl::Rng& rng) {
+                                                  return scene.radiance(r, rng, Mode::pt, none);
+                                              });
+        const BatchImages lo = render_batches(cam, spp_low, B, seed + 1, threads, "fig9 low order",
+                                              [&](const gl::Ray<double>& r, gl::Rng& rng) {
+                                                  return scene.radiance(r, rng, Mode::low, &tracer);
+                                              });
+        // Per-thread tallies of the shell-traced parts (summed after the render).
+        std::vector<gl::ShellTraceStats> tstats(256);
+        const BatchImages hi = render_batches(cam, spp_high, B, seed + 2, threads, "fig9 high order (shells)",
+                                              [&](const gl::Ray<double>& r, gl::Rng& rng) {
+#if defined(_OPENMP)
+                                                  const int tid = std::min(255, omp_get_thread_num());
+#else
+                                                  const int tid = 0;
+#endif
+                                                  return scene.radiance(r, rng, Mode::high, &tracer, nullptr,
+                                                                        &tstats[std::size_t(tid)]);
+                                              });
+        gl::ShellTraceStats ts;
+        for (const auto& t : tstats) {
+            ts.paths += t.paths;
+            ts.steps += t.steps;
+            ts.scattered += t.scattered;
+            ts.exits += t.exits;
+            ts.straight_escapes += t.straight_escapes;
+        }
+        const double high_samples = double(spp_high) * B * double(n_mask);
+
+        // --- statistics over the cube pixels ---
+        const std::size_t NP = std::size_t(W) * std::size_t(H);
+        std::vector<double> I_pt(NP), I_lo(NP), I_hi(NP), I_sh(NP);
+        double sum_pt = 0, sum_sh = 0, sum_lo = 0, sum_hi = 0, var_pt = 0, var_sh = 0, sq = 0;
+        for (std::size_t i = 0; i < NP; ++i) {
+            I_pt[i] = pt.mean(i);
+            I_lo[i] = lo.mean(i);
+            I_hi[i] = hi.mean(i);
+            I_sh[i] = I_lo[i] + I_hi[i];
+            if (!mask[i]) continue;
+            sum_pt += I_pt[i];
+            sum_sh += I_sh[i];
+            sum_lo += I_lo[i];
+            sum_hi += I_hi[i];
+            var_pt += pt.var_mean(i);
+            var_sh += lo.var_mean(i) + hi.var_mean(i);
+            sq += (I_sh[i] - I_pt[i]) * (I_sh[i] - I_pt[i]);
+        }
+        const double nm = double(n_mask);
+        const double mean_pt = sum_pt / nm, mean_sh = sum_sh / nm;
+        var_pt /= nm;
+        var_sh /= nm;
+        // Pixel-wise estimate (noisy: dominated by the reference's own variance at these budgets).
+        const double mse_sh_pixelwise = std::max(sq / nm - var_pt, var_sh);
+        // Bias of the mean over the cube pixels (exit rule + table), standard error from batches.
+        auto region_se = [&](const BatchImages& bi) {
+            std::vector<double> m(std::size_t(bi.B), 0.0);
+            for (int b = 0; b < bi.B; ++b)
+                for (std::size_t i = 0; i < NP; ++i)
+                    if (mask[i]) m[std::size_t(b)] += bi.img[std::size_t(b)][i] / nm;
+            gl::Welford w;
+            for (double v : m) w.add(v);
+            return w.standard_error();
+        };
+        const double se_pt = region_se(pt), se_sh = std::hypot(region_se(lo), region_se(hi));
+        // Error of the shell image against the truth: its variance plus the squared bias of the
+        // mean over the cube, less the part of that difference explained by the noise of both
+        // means (a bias inside the noise counts as zero; measuring.md).
+        const double bias2 = std::max(0.0, (mean_sh - mean_pt) * (mean_sh - mean_pt) - se_pt * se_pt - se_sh * se_sh);
+        const double mse_sh = var_sh + bias2;
+        const double rmse_pt = std::sqrt(var_pt), rmse_sh = std::sqrt(mse_sh);
+        const double bias_rel = (mean_sh - mean_pt) / mean_pt;
+        const double bias_rel_se = std::hypot(se_pt, se_sh) / mean_pt;
+        const double t_shells = lo.cpu + hi.cpu;
+        const double speedup = pt.cpu * var_pt / mse_sh / t_shells;
+        // Variance-only (time to unit variance) ratio: the speed-up if the bias were zero.
+        const double ttuv_ratio = (pt.cpu * var_pt) / (t_shells * var_sh);
+
+        // --- outputs ---
+        const double scale = 0.35 / std::max(1e-12, mean_pt);
+        write_image(out, "moon07_fig9_pt", I_pt, W, H, scale);
+        write_image(out, "moon07_fig9_shells", I_sh, W, H, scale);
+        write_image(out, "moon07_fig9_low", I_lo, W, H, scale);
+        write_image(out, "moon07_fig9_high", I_hi, W, H, scale);
+        // Ours (CPU s) beside the paper's (minutes on a 128-CPU cluster, as CPU s).
+        gl_examples::Csv csv({"seconds_pt", "seconds_low", "seconds_high", "speedup_equal_error", "mean_pt",
+                              "mean_shells", "rmse_pt", "rmse_shells", "bias_rel"});
+        csv.row({pt.cpu, lo.cpu, hi.cpu, speedup, mean_pt, mean_sh, rmse_pt, rmse_sh, bias_rel});
+        csv.row({236 * 60 * 128.0, 12 * 60 * 128.0, 2.25 * 60 * 128.0, 16.0, 0, 0, 0, 0, 0});
+        csv.write(out / "moon07_fig9_cube_shadow.csv");
+        std::cout << "Moon07 Fig. 9 (cube of glass spheres, shadow edge), " << kept.size() << " spheres, " << W << "x"
+                  << H << ", " << B << " batches\n"
+                  << "  path tracing: " << pt.cpu << " CPU s (" << spp_pt * B << " spp)   paper: 236 min x 128 CPUs\n"
+                  << "  low order:    " << lo.cpu << " CPU s (" << spp_low * B << " spp)   paper: 12 min\n"
+                  << "  high order:   " << hi.cpu << " CPU s (" << spp_high * B << " spp)   paper: 2.25 min\n"
+                  << "  mean over the cube: PT " << mean_pt << ", shells " << mean_sh << " (low " << sum_lo / nm
+                  << " + high " << sum_hi / nm << "), bias " << 100 * bias_rel << " +- " << 100 * bias_rel_se
+                  << " %\n"
+                  << "  RMSE: PT " << rmse_pt << ", shells " << rmse_sh << "; equal-error speed-up " << speedup
+                  << "x   paper: 16x (236 / 14.25 min)\n"
+                  << "  shell table: raw " << raw_bytes / 1024 << " KiB -> factored " << factored_bytes / 1024
+                  << " KiB   paper: ~30 MB -> 250 KB\n";
+        const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+        gl_examples::Json j;
+        j.num("seconds_pt", pt.cpu)
+            .num("seconds_low", lo.cpu)
+            .num("seconds_high", hi.cpu)
+            .num("rmse_pt", rmse_pt)
+            .num("rmse_shells", rmse_sh)
+            .num("speedup_equal_error", speedup)
+            .num("mean_pt", mean_pt)
+            .num("mean_shells", mean_sh)
+            .num("mean_low", sum_lo / nm)
+            .num("mean_high", sum_hi / nm)
+            .num("bias_rel", bias_rel)
+            .num("bias_rel_se", bias_rel_se)
+            .num("ttuv_ratio", ttuv_ratio)
+            .num("rmse_shells_pixelwise", std::sqrt(mse_sh_pixelwise))
+            .num("paper_speedup", 16.0)
+            .num("switched_fraction", double(ts.paths) / high_samples)
+            .num("shell_steps_per_switched_path", ts.paths ? double(ts.steps) / double(ts.paths) : 0.0)
+            .num("exit_fraction", ts.paths ? double(ts.exits) / double(ts.paths) : 0.0)
+            .integer("min_scatter", min_scatter)
+            .num("switch_depth", to.switch_depth)
+            .integer("spheres", (long long)kept.size())
+            .num("cube_side_R", L)
+            .integer("cube_pixels", (long long)n_mask)
+            .num("shell_build_cpu_seconds", build_seconds)
+            .boolean("shell_table_cached", cached)
+            .num("nmf_error", nmf_error)
+            .num("shell_raw_bytes", raw_bytes)
+            .num("shell_factored_bytes", factored_bytes)
+            .num("wall_seconds", wall);
+        std::cout << j.str() << std::endl;
+        return 0;
+    });
+}

@@ -1,0 +1,306 @@
+/// @file grainlight/integrators/shell_tracer.hpp
+/// Rendering and transport with Moon07 shell transport functions (Moon, Walter & Marschner,
+/// EGSR 2007, Secs. 4.2-4.3, Figs. 5-7): paths are traced exactly near the surface of a medium
+/// and advance by the largest precomputed shell that fits around them in its interior.
+///
+/// Three pieces:
+///   - `ShellSwitchMedium<Exact, Boundary>`: a Medium (media/concepts.hpp) that takes a Fig. 5
+///     shell step from every point whose distance to the medium surface (the `Boundary` query,
+///     e.g. geometry/distance.hpp) is at least the smallest shell radius r_0, and an exact step of
+///     the underlying medium otherwise. For a *continuous* medium this is exact up to the table's
+///     discretization (free flights are memoryless, so handing a path back to exact steps near
+///     the surface needs no approximate exit rule); the slab solver below uses it through the
+///     walk kernel (integrators/walk.hpp) to check the shell machinery against transport theory.
+///   - `ShellSlab`: the plane-parallel slab of scene/slab.hpp (same parameters and estimator)
+///     solved by shell stepping: `slab --method shells`.
+///   - `ShellTracer`: the Fig. 6 integrator for the high-order part of paths in a discrete
+///     medium (switch rule, both shadow rays, the exit rule; see its comment).
+///
+/// Kernel rules: no allocation, exceptions or virtual calls per sample; randomness from `rng`.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <concepts>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "grainlight/core/error.hpp"
+#include "grainlight/core/ray.hpp"
+#include "grainlight/core/rng.hpp"
+#include "grainlight/core/spectrum.hpp"
+#include "grainlight/core/statistics.hpp"
+#include "grainlight/geometry/distance.hpp"
+#include "grainlight/integrators/walk.hpp"
+#include "grainlight/media/concepts.hpp"
+#include "grainlight/media/continuous.hpp"
+#include "grainlight/media/shell.hpp"
+#include "grainlight/phase/henyey_greenstein.hpp"
+#include "grainlight/scene/concepts.hpp"
+#include "grainlight/scene/slab.hpp"
+#if __has_include("grainlight/integrators/slab.hpp")
+#include "grainlight/integrators/slab.hpp"  // SlabProblem, where main moved it from scene/slab.hpp
+#endif
+
+namespace grainlight {
+
+/// Step counts of a walk through a ShellSwitchMedium.
+struct ShellSwitchStats {
+    std::uint64_t shell_steps = 0;  ///< steps taken with a shell
+    std::uint64_t exact_steps = 0;  ///< steps of the exact medium
+};
+
+/// A medium that advances by Moon07 shells where one fits (distance to the surface >= r_0,
+/// the largest r_i <= distance is used: Fig. 5) and by exact steps of `Exact` elsewhere.
+/// Scattered shell exits are `scatter` events with `has_direction`; straight shell steps are
+/// `null` events. Absorption inside shells is analog by default (grey 0/1 path scores).
+/// \tparam Exact a Medium with a phase function (the medium the table was built from)
+/// \tparam Boundary distance-to-surface query double(const Vec3d&) (>= 0 inside)
+template <class Exact, class Boundary>
+    requires PhaseMedium<Exact>
+class ShellSwitchMedium {
+public:
+    using Float = typename Exact::Float;
+    using Spectrum = typename Exact::Spectrum;
+    using F = Float;
+    using S = Spectrum;
+    using Shells = ShellMedium<F, S, Boundary>;
+
+    /// \param exact the underlying medium; \param table its shell table (validated);
+    /// \param boundary distance-to-surface query; \param analog_absorption see ShellMedium.
+    ShellSwitchMedium(Exact exact, ShellTable table, Boundary boundary, bool analog_absorption = true)
+        : exact_(std::move(exact)), shells_(std::move(table), boundary, analog_absorption), boundary_(boundary),
+          r0_(F(shells_.table().radii.front())) {}
+
+    [[nodiscard]] const Exact& exact() const noexcept { return exact_; }
+    [[nodiscard]] const Shells& shells() const noexcept { return shells_; }
+    [[nodiscard]] decltype(auto) phase() const noexcept { return exact_.phase(); }
+    [[nodiscard]] F r0() const noexcept { return r0_; }
+
+    /// True if a step from p is a shell step (distance to the surface >= r_0).
+    [[nodiscard]] bool uses_shell(const Vec3<F>& p) const noexcept { return F(boundary_(Vec3d(p))) >= r0_; }
+
+    [[nodiscard]] Interaction<F, S> sample_interaction(const Ray<F>& ray, F t_max, Rng& rng) const noexcept {
+        if (uses_shell(ray.o)) return shells_.sample_interaction(ray, t_max, rng);
+        return exact_.sample_interaction(ray, t_max, rng);
+    }
+    /// Exact transmittance of the underlying medium.
+    [[nodiscard]] S transmittance(const Ray<F>& r, F t, Rng& rng) const noexcept {
+        return exact_.transmittance(r, t, rng);
+    }
+
+private:
+    Exact exact_;
+    Shells shells_;
+    Boundary boundary_;
+    F r0_;
+};
+
+/// Shell radii for a slab solved by shells: `n` radii linearly spaced from r0 to
+/// min(r_cap, thickness / 2) (optical depths; sigma_t = 1). Throws invalid_argument naming the
+/// parameter when no shell fits (r0 > thickness / 2) or n < 1.
+[[nodiscard]] inline std::vector<double> slab_shell_radii(double optical_depth, int n, double r0 = 0.75,
+                                                          double r_cap = 8.0) {
+    constexpr const char* where = "slab_shell_radii";
+    check_argument(n >= 1 && n <= 1024, where, "n", n, "[1, 1024]");
+    check_argument(std::isfinite(r0) && r0 > 0, where, "r0", r0, "(0, inf)");
+    check_argument(std::isfinite(r_cap) && r_cap >= r0, where, "r_cap", r_cap, "[r0, inf)");
+    const double r_max = std::min(r_cap, 0.5 * optical_depth);
+    check_argument(r_max >= r0, where, "optical_depth", optical_depth,
+                   "at least 2 r0 = " + std::to_string(2 * r0) + " (no shell fits between the faces)");
+    std::vector<double> r(static_cast<std::size_t>(n), r0);
+    for (int i = 0; i < n; ++i) r[std::size_t(i)] = n == 1 ? r0 : r0 + (r_max - r0) * double(i) / double(n - 1);
+    if (n > 1 && !(r_max > r0)) r.resize(1);
+    return r;
+}
+
+/// The slab of scene/slab.hpp (same parameters, geometry and R/T estimator) solved by shell
+/// stepping: inside, paths advance by the largest shell of `table` that fits between the faces;
+/// within r_0 of a face they take exact continuous-medium steps (walk kernel, Fresnel faces).
+/// `table` must have been built from the slab's own medium (sigma_t = 1, its albedo and g).
+class ShellSlab {
+public:
+    using F = double;
+    using S = Spectrum<1, double>;
+    using Phase = HenyeyGreenstein<double, S>;
+    using Exact = ContinuousMedium<Phase, S>;
+    using MediumType = ShellSwitchMedium<Exact, SlabDistance>;
+    using SceneType = SlabScene<MediumType>;
+
+    /// Throws invalid_argument for bad slab parameters (as SlabProblem) or an invalid table.
+    ShellSlab(const SlabParams& p, ShellTable table)
+        : problem_(p), scene_(MediumType(problem_.scene().medium(0), std::move(table), SlabDistance{p.optical_depth}),
+                              p.optical_depth, p.ior) {}
+
+    [[nodiscard]] const SlabParams& params() const noexcept { return problem_.params(); }
+    [[nodiscard]] const SceneType& scene() const noexcept { return scene_; }
+
+    /// Paths [first, first + count) with Pcg32::from_key(seed, path, 0) (thread-count
+    /// independent). `stats` (optional) receives the step counts.
+    [[nodiscard]] SlabTally run(std::uint64_t first, std::uint64_t count, std::uint64_t seed,
+                                ShellSwitchStats* stats = nullptr) const noexcept {
+        SlabTally tally;
+        const double mu0 = params().mu0;
+        const Vec3d d(std::sqrt(std::max(0.0, 1.0 - mu0 * mu0)), 0.0, -mu0);
+        WalkOptions<F> opt;
+        opt.mode = TransportMode::importance;
+        const MediumType& m = scene_.medium(0);
+        for (std::uint64_t i = first; i < first + count; ++i) {
+            Rng rng = Rng::from_key(seed, i, 0);
+            Scorer sc{&m, stats};
+            PathState<F, S> st = start_path<F, S>(Ray<F>(Vec3d(0.0, 0.0, 1.0), d), -1);
+            (void)walk(scene_, st, rng, sc, opt);
+            tally.R.add(sc.r);
+            tally.T.add(sc.t);
+            ++tally.paths;
+        }
+        return tally;
+    }
+
+private:
+    struct Scorer {
+        const MediumType* m = nullptr;
+        ShellSwitchStats* stats = nullptr;
+        double r = 0, t = 0;
+        void on_segment(const PathState<F, S>& st, F) noexcept {
+            if (!stats || st.medium < 0) return;
+            if (m->uses_shell(st.ray.o))
+                ++stats->shell_steps;
+            else
+                ++stats->exact_steps;
+        }
+        void on_escape(const PathState<F, S>& st) noexcept {
+            if (st.ray.d.z > 0)
+                r += st.throughput[0];
+            else
+                t += st.throughput[0];
+        }
+    };
+    SlabProblem problem_;
+    SceneType scene_;
+};
+
+/// Options of the Fig. 6 shell tracer.
+struct ShellTracerOptions {
+    int min_scatter = 2;        ///< explicit events before a path may switch to shells (switch rule)
+    double switch_depth = -1;   ///< distance to the surface required to switch (< 0: r_0 of the table)
+    bool nee = true;            ///< Fig. 6's two shadow rays (false: count escapes that hit lights)
+    int max_steps = 100000;     ///< shell steps per path at most
+};
+
+/// What a shell-traced path did (for statistics).
+struct ShellTraceStats {
+    std::uint64_t paths = 0, steps = 0, scattered = 0, exits = 0, straight_escapes = 0;
+};
+
+/// Moon07 Fig. 6 (advanceRayUsingShellsWithDirect) as an integrator for the high-order part of a
+/// path inside a homogeneous discrete random medium:
+///   - `Volume`: the medium's volume; signed distance `double operator()(Vec3d)` (>= 0 inside,
+///     geometry/distance.hpp) picks the largest shell that fits (else r_0), and
+///     `exit_distance(p, w)` is the "distance to surface along omega";
+///   - `Env` (the scene outside the medium): `LightSample<double, S> sample_light(p, Vec3d u)`
+///     (pick a light and a point on it, solid-angle pdf), `bool visible(p, w, dist)` (no blocker
+///     between p and the light point; the medium itself is accounted for by the shells) and
+///     `S escape(const Ray<double>&)` (radiance arriving along a ray leaving the volume: a light
+///     it hits, or the environment).
+/// From the switch point (x, omega) the path takes Fig. 5 steps. With `nee`, at every step the
+/// first shadow ray adds L p_r(y = x_l) (ShellMedium::exit_escape_density) and after every
+/// scattered step the second adds L p_r(w_l | x_{i+1}) T (straight_escape_density); then exits
+/// outside the volume and straight escapes along a direction set by a scattered step are not
+/// counted again (they are what the shadow rays estimate); a straight escape along the switch
+/// direction is counted through `escape`. Without `nee` every escape is followed by `escape`
+/// (exits leave along y - x, the paper's exit rule): the analog estimator the shadow rays
+/// replace. Both estimate the same expectation (tests/shells/test_shell_tracer.cpp).
+template <class S, class Volume>
+class ShellTracer {
+public:
+    using Shells = ShellMedium<double, S, Volume>;
+
+    ShellTracer(ShellTable table, Volume volume, ShellTracerOptions opt = {})
+        : shells_(std::move(table), volume, /*analog_absorption*/ false), volume_(std::move(volume)), opt_(opt) {
+        check_argument(opt.min_scatter >= 0, "ShellTracer", "min_scatter", opt.min_scatter, ">= 0");
+        check_argument(opt.max_steps >= 1, "ShellTracer", "max_steps", opt.max_steps, ">= 1");
+        check_argument(!std::isnan(opt.switch_depth), "ShellTracer", "switch_depth", opt.switch_depth,
+                       "a number (< 0: r_0 of the table)");
+        switch_depth_ = opt.switch_depth < 0 ? shells_.table().radii.front() : opt.switch_depth;
+    }
+
+    [[nodiscard]] const Shells& shells() const noexcept { return shells_; }
+    [[nodiscard]] const Volume& volume() const noexcept { return volume_; }
+    [[nodiscard]] const ShellTracerOptions& options() const noexcept { return opt_; }
+    [[nodiscard]] double switch_depth() const noexcept { return switch_depth_; }
+
+    /// The switch rule (Sec. 4.2): at least min_scatter explicit events and at least the switch
+    /// depth (default r_0) inside the volume.
+    [[nodiscard]] bool may_switch(const Vec3d& p, int events) const noexcept {
+        return events >= opt_.min_scatter && volume_(p) >= switch_depth_;
+    }
+
+    /// Radiance gathered by the shell-traced remainder of a path at x (inside) travelling along
+    /// unit omega (Fig. 6), per unit path throughput.
+    template <class Env>
+    [[nodiscard]] S trace(Vec3d x, Vec3d omega, Rng& rng, const Env& env, ShellTraceStats* stats = nullptr) const noexcept {
+        S L(0.0);
+        double beta = 1.0;
+        bool dir_from_scatter = false;
+        if (stats) ++stats->paths;
+        const auto inside = [this](const Vec3d& p) { return !(volume_(p) < 0.0); };
+        for (int k = 0; k < opt_.max_steps; ++k) {
+            const double t_b = volume_.exit_distance(x, omega);
+            if (opt_.nee) {  // first shadow ray: leave through a sampled exit point outside
+                const LightSample<double, S> ls = env.sample_light(x, Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()));
+                if (ls) {
+                    const double dens = shells_.exit_escape_density(x, omega, t_b, ls.w);
+                    if (dens > 0 && env.visible(x, ls.w, ls.dist)) L += ls.L * (beta * dens / ls.pdf);
+                }
+            }
+            const ShellStep<double> st = shells_.step(x, omega, t_b, rng, inside);
+            if (stats) ++stats->steps;
+            switch (st.kind) {
+                case ShellStepKind::straight:
+                    x = st.p;
+                    continue;
+                case ShellStepKind::absorbed:
+                    return L;
+                case ShellStepKind::escaped:
+                    if (stats) ++stats->straight_escapes;
+                    if (!opt_.nee || !dir_from_scatter) L += env.escape(Ray<double>(st.p, omega)) * beta;
+                    return L;
+                case ShellStepKind::exited:
+                    if (stats) ++stats->exits;
+                    if (!opt_.nee) L += env.escape(Ray<double>(st.p, st.w)) * beta;
+                    return L;
+                case ShellStepKind::scattered: {
+                    if (stats) ++stats->scattered;
+                    beta *= st.weight;
+                    if (opt_.nee) {  // second shadow ray: continue along w_l and leave unscattered
+                        const LightSample<double, S> ls = env.sample_light(st.p, Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()));
+                        if (ls) {
+                            const double d_l = volume_.exit_distance(st.p, ls.w);
+                            const double dens = shells_.straight_escape_density(st.shell, x, omega, st.p, ls.w, d_l);
+                            if (dens > 0 && env.visible(st.p, ls.w, ls.dist)) L += ls.L * (beta * dens / ls.pdf);
+                        }
+                    }
+                    x = st.p;
+                    omega = st.w;
+                    dir_from_scatter = true;
+                    if (!(beta > 0)) return L;
+                    continue;
+                }
+            }
+        }
+        return L;
+    }
+
+private:
+    Shells shells_;
+    Volume volume_;
+    ShellTracerOptions opt_;
+    double switch_depth_ = 0;
+};
+
+
+}  // namespace grainlight

@@ -1,0 +1,146 @@
+// Distance-to-boundary queries (geometry/distance.hpp): nearest point on a triangle and on a mesh
+// against brute force, analytic box distance against the same box as a mesh, the icosphere
+// against the sphere it is inscribed in, and the property the shell tracer relies on: the
+// largest ball that "fits" (radius = distance) never crosses the surface, over random points of
+// procedural grain meshes; bad input.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "grainlight/core/rng.hpp"
+#include "grainlight/core/warp.hpp"
+#include "grainlight/geometry/bvh.hpp"
+#include "grainlight/geometry/distance.hpp"
+#include "grainlight/geometry/grains.hpp"
+
+using namespace grainlight;
+
+namespace {
+
+TriangleMesh<double> box_mesh(const Vec3d& lo, const Vec3d& hi) {
+    TriangleMesh<double> m;
+    for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z);
+    // Outward-oriented faces (two triangles each).
+    const std::uint32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& q : f) {
+        m.triangles.push_back({q[0], q[1], q[2]});
+        m.triangles.push_back({q[0], q[2], q[3]});
+    }
+    return m;
+}
+
+double brute_distance(const TriangleMesh<double>& m, const Vec3d& p) {
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < m.triangles.size(); ++i) {
+        const auto c = m.corners(i);
+        best = std::min(best, glm::length(closest_point_on_triangle(p, c[0], c[1], c[2]) - p));
+    }
+    return best;
+}
+
+}  // namespace
+
+TEST_CASE("closest point on a triangle matches a dense barycentric search", "[geometry][distance]") {
+    Rng rng = Rng::from_key(101);
+    const Vec3d a(0, 0, 0), b(1.3, 0.1, 0), c(0.2, 0.9, 0.3);
+    for (int k = 0; k < 200; ++k) {
+        const Vec3d p = Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()) * 4.0 - Vec3d(1.5);
+        const Vec3d q = closest_point_on_triangle(p, a, b, c);
+        double dense = std::numeric_limits<double>::infinity();
+        const int n = 200;
+        for (int i = 0; i <= n; ++i)
+            for (int j = 0; i + j <= n; ++j) {
+                const Vec3d s = a + (double(i) / n) * (b - a) + (double(j) / n) * (c - a);
+                dense = std::min(dense, glm::length(s - p));
+            }
+        // Exact nearest point: never farther than the grid's best, and at most one grid step closer.
+        REQUIRE(glm::length(q - p) <= dense + 1e-12);
+        REQUIRE(glm::length(q - p) >= dense - 0.01);
+    }
+}
+
+TEST_CASE("MeshDistance: tree search equals brute force; box mesh equals BoxDistance", "[geometry][distance]") {
+    const Vec3d lo(-1, -0.5, -2), hi(2, 1.5, 0.5);
+    const TriangleMesh<double> m = box_mesh(lo, hi);
+    const MeshDistance md(m);
+    const BoxDistance bd(lo, hi);
+    Rng rng = Rng::from_key(102);
+    int inside = 0;
+    for (int k = 0; k < 2000; ++k) {
+        const Vec3d p(-2 + 5 * rng.uniform<double>(), -1.5 + 4 * rng.uniform<double>(), -3 + 4.5 * rng.uniform<double>());
+        const NearestPoint np = md.nearest(p);
+        REQUIRE(np.distance == Approx(brute_distance(m, p)).margin(1e-12));
+        REQUIRE(md(p) == Approx(bd(p)).margin(1e-9));
+        inside += bd(p) > 0;
+    }
+    REQUIRE(inside > 200);
+    // Icosphere (vertices on the unit sphere, inscribed): 0 <= sphere - mesh distance <= sagitta.
+    const TriangleMesh<double> ico = make_icosphere<double>(3);
+    const MeshDistance mi(ico);
+    const SphereDistance sd(Vec3d(0.0), 1.0);
+    double max_edge = 0;
+    for (std::size_t i = 0; i < ico.triangles.size(); ++i) {
+        const auto c = ico.corners(i);
+        max_edge = std::max({max_edge, glm::length(c[1] - c[0]), glm::length(c[2] - c[1]), glm::length(c[0] - c[2])});
+    }
+    const double sagitta = 1 - std::sqrt(1 - max_edge * max_edge / 3);  // circumradius of a triangle <= edge/sqrt(3)
+    for (int k = 0; k < 500; ++k) {
+        const Vec3d p = sample_uniform_sphere(rng.uniform2<double>()) * std::cbrt(rng.uniform<double>()) * 0.98;
+        const double d = mi(p);
+        REQUIRE(d > 0);
+        REQUIRE(sd(p) - d >= -1e-12);
+        REQUIRE(sd(p) - d <= sagitta + 1e-12);
+        REQUIRE(d == Approx(brute_distance(ico, p)).margin(1e-12));
+    }
+}
+
+TEST_CASE("the largest ball that fits never crosses a mesh surface (random points of grain meshes)",
+          "[geometry][distance][property]") {
+    Rng rng = Rng::from_key(103);
+    for (GrainShape shape : {GrainShape::snow, GrainShape::crystal, GrainShape::rice, GrainShape::flake}) {
+        const TriangleMesh<double> mesh = make_grain_mesh<double>(shape, 1.0, 7, 3);
+        const MeshDistance md(mesh);
+        const Bvh<double> bvh(mesh);
+        const Aabb<double> b = md.bounds();
+        int tested = 0, tight = 0;
+        for (int k = 0; k < 4000 && tested < 150; ++k) {
+            const Vec3d p = b.lo + Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()) * b.extent();
+            if (!md.inside(p)) continue;
+            const double d = md(p);
+            REQUIRE(d > 0);
+            REQUIRE(ball_inside(md, p, d));
+            ++tested;
+            // No direction reaches the surface within d (ray against the BVH): the ball B(p, d)
+            // does not cross the boundary.
+            for (int j = 0; j < 200; ++j) {
+                const Vec3d w = sample_uniform_sphere(rng.uniform2<double>());
+                REQUIRE_FALSE(bvh.intersect(p, w, 0.0, d * (1 - 1e-9)));
+                REQUIRE(md.inside(p + w * (d * (1 - 1e-6))));
+            }
+            // Tight: towards the nearest point the surface is reached at distance d.
+            const NearestPoint np = md.nearest(p);
+            const Vec3d w = glm::normalize(np.point - p);
+            const TriangleHit<double> h = bvh.intersect(p, w, 0.0, 2 * d + 1);
+            REQUIRE(bool(h));
+            if (std::abs(h.t - d) <= 1e-9 * (1 + d)) ++tight;
+        }
+        REQUIRE(tested == 150);
+        REQUIRE(tight >= 140);  // the ray may hit an adjacent triangle at an edge within rounding
+    }
+}
+
+TEST_CASE("analytic distances and bad input", "[geometry][distance]") {
+    const SlabDistance slab{2.0};
+    REQUIRE(slab(Vec3d(0, 0, -0.5)) == Approx(0.5));
+    REQUIRE(slab(Vec3d(0, 0, -1.5)) == Approx(0.5));
+    REQUIRE(slab(Vec3d(0, 0, 1.0)) == Approx(-1.0));
+    const SlabDistance half{std::numeric_limits<double>::infinity()};
+    REQUIRE(half(Vec3d(0, 0, -1e6)) == Approx(1e6));
+    REQUIRE(SphereDistance(Vec3d(1, 0, 0), 2)(Vec3d(4, 0, 0)) == Approx(-1.0));
+    REQUIRE(BoxDistance(Vec3d(0.0), Vec3d(1.0))(Vec3d(2, 2, 0.5)) == Approx(-std::sqrt(2.0)));
+    REQUIRE_THROWS_WITH(SphereDistance(Vec3d(0.0), -1.0), Catch::Contains("radius"));
+    REQUIRE_THROWS_WITH(BoxDistance(Vec3d(0.0), Vec3d(1, 0, 1)), Catch::Contains("hi - lo"));
+    TriangleMesh<double> open = box_mesh(Vec3d(0.0), Vec3d(1.0));
+    open.triangles.pop_back();  // not closed
+    REQUIRE_THROWS_WITH(MeshDistance(open), Catch::Contains("watertight"));
+}
