@@ -5,6 +5,7 @@
 
 #include "grainlight/geometry/aabb.hpp"
 #include "grainlight/geometry/bvh.hpp"
+#include "grainlight/geometry/distance.hpp"
 #include "grainlight/geometry/grain.hpp"
 #include "grainlight/geometry/grain_walk.hpp"
 #include "grainlight/geometry/grains.hpp"

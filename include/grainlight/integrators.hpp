@@ -12,6 +12,7 @@
 #include "grainlight/integrators/ms_table.hpp"
 #include "grainlight/integrators/point_based.hpp"
 #include "grainlight/integrators/render.hpp"
+#include "grainlight/integrators/shell_tracer.hpp"
 #include "grainlight/integrators/slab.hpp"
 #include "grainlight/integrators/vpt.hpp"
 #include "grainlight/integrators/walk.hpp"

@@ -40,10 +40,8 @@
 #include "grainlight/media/shell.hpp"
 #include "grainlight/phase/henyey_greenstein.hpp"
 #include "grainlight/scene/concepts.hpp"
+#include "grainlight/integrators/slab.hpp"
 #include "grainlight/scene/slab.hpp"
-#if __has_include("grainlight/integrators/slab.hpp")
-#include "grainlight/integrators/slab.hpp"  // SlabProblem, where main moved it from scene/slab.hpp
-#endif
 
 namespace grainlight {
 
