@@ -9,12 +9,14 @@
 #      benchmarks or header check) and run them with halt_on_error=1 (GRAINLIGHT_SANITIZE_TESTS
 #      selects ctest entries by regex; default: every test binary);
 #   5. clang 14 build of the test binaries (`cmake --preset clang`, no examples/benchmarks) and
-#      run them.
+#      run them;
+#   6. the libFuzzer targets of tests/fuzz/ (scripts/fuzz.sh: clang 14, ASan + UBSan), each
+#      loader for GRAINLIGHT_FUZZ_SECONDS (default 25 s), after re-running kept crash inputs.
 # Each phase prints its wall time and CPU time (children's user + sys) at the end.
 # Environment: GRAINLIGHT_BUILD_DIR (Release build, default build/release),
 # GRAINLIGHT_SANITIZE_BUILD_DIR (default <release dir>-sanitize), GRAINLIGHT_CLANG_BUILD_DIR
 # (default <release dir>-clang), GRAINLIGHT_JOBS (default nproc), GRAINLIGHT_SKIP_SANITIZE=1,
-# GRAINLIGHT_SKIP_CLANG=1 (local shortcuts; CI runs everything).
+# GRAINLIGHT_SKIP_CLANG=1, GRAINLIGHT_SKIP_FUZZ=1 (local shortcuts; CI runs everything).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -102,6 +104,12 @@ if [ "${GRAINLIGHT_SKIP_CLANG:-0}" != 1 ]; then
 
   phase "clang 14: ctest"
   ctest --test-dir "$CLANG_BUILD" --output-on-failure -j"$JOBS" -L unit
+fi
+
+if [ "${GRAINLIGHT_SKIP_FUZZ:-0}" != 1 ]; then
+  phase "fuzz: build + run (clang 14 libFuzzer)"
+  # Every loader for GRAINLIGHT_FUZZ_SECONDS (default 25) each; kept crash inputs re-run first.
+  scripts/fuzz.sh "$BUILD-fuzz"
 fi
 
 phase ""
