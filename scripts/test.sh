@@ -27,12 +27,12 @@ JOBS=${GRAINLIGHT_JOBS:-$(nproc)}
 start=$(date +%s)
 timings=()
 
-# CPU seconds (user + sys) used so far by this shell's finished children (`times` must run in
-# this shell, not in a pipeline or $(...) subshell, whose counters start at zero).
+# CPU seconds (user + sys) used so far by this shell's finished children. `times` must run in
+# this shell itself (not in a pipeline or a $(...) subshell, whose counters start at zero), so
+# it writes to a file and only the parsing runs in a subshell.
 TIMES_FILE=$(mktemp)
 trap 'rm -f "$TIMES_FILE"' EXIT
-cpu_seconds() {
-  times >"$TIMES_FILE"  # line 2: "XmY.YYYs XmY.YYYs", the children's user and system time
+cpu_seconds_from_file() {  # line 2 of `times`: "XmY.YYYs XmY.YYYs", the children's user and sys time
   awk 'NR == 2 { n = split($0, a, /[ms ]+/); s = 0; for (i = 1; i + 1 <= n; i += 2) s += a[i] * 60 + a[i + 1]; print s }' "$TIMES_FILE"
 }
 phase_name=""
@@ -41,7 +41,8 @@ phase_cpu=0
 phase() {  # phase "<name>": close the running phase (if any) and open the next one
   local now cpu
   now=$(date +%s)
-  cpu=$(cpu_seconds)
+  times >"$TIMES_FILE"
+  cpu=$(cpu_seconds_from_file)
   if [ -n "$phase_name" ]; then
     local line
     line=$(awk -v n="$phase_name" -v w=$((now - phase_start)) -v c0="$phase_cpu" -v c1="$cpu" \
