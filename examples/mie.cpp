@@ -4,10 +4,14 @@
 //   mie --n 1.33 --radius-um 5 --wavelength-um 0.6 --host-index 1 --method auto
 //
 // n + i k is the particle's index relative to the host (k >= 0 absorbs); angles in degrees;
-// x = 2 pi N R / L with L the vacuum wavelength and N the host index. `auto` uses Mie below
-// r = 2 um and GOA from 2 um on (Guo21 Sec. 3.3), so it needs --radius-um.
+// x = 2 pi N R / L with L the vacuum wavelength and N the host index. `auto` uses GOA from
+// r = 2 um on (Guo21 Sec. 3.3) where GOA is valid (x >= 45, or 100 for k > 2, and phase shift
+// 2 x |m - 1| >= 6; optics/goa.hpp goa_validity) and exact Mie elsewhere; it needs --radius-um.
+// `goa` outside that range still computes but prints a warning line on stderr, and refuses
+// (exit code 2) where GOA's Qext or Qsca would be negative.
 // The last line of stdout is one JSON object:
-//   {"qext":..,"qsca":..,"qabs":..,"qback":..,"g":..,"S1":[[re,im],..],"S2":[[re,im],..],"method":..}
+//   {"qext":..,"qsca":..,"qabs":..,"qback":..,"g":..,"S1":[[re,im],..],"S2":[[re,im],..],"method":..,
+//    "goa_valid":..,"phase_shift":..}
 // S1, S2 in van de Hulst's convention (Re S(0) = x^2 Qext / 4; optics/lorenz_mie.hpp).
 #include <cmath>
 #include <complex>
@@ -49,7 +53,7 @@ int main(int argc, char** argv) {
             .option("host-index", "host refractive index N (> 0)", "1")
             .option("angles", "scattering angles in degrees, comma-separated, each in [0, 180]",
                     "0,30,60,90,120,150,180")
-            .option("method", "mie | goa | auto (auto: Mie below r = 2 um, GOA above; needs --radius-um)", "mie")
+            .option("method", "mie | goa | auto (auto: GOA from r = 2 um on where GOA is valid, Mie elsewhere; needs --radius-um)", "mie")
             .option("p-max", "highest GOA order p", "3")
             .option("out", "if given: also write DIR/mie.csv (S1, S2 at 0..180 deg, 0.5-deg steps) and DIR/mie.png");
         cli.finish();
@@ -84,17 +88,22 @@ int main(int argc, char** argv) {
         if (x > 1e6) throw cli_error("size parameter x = " + std::to_string(x) + " is too large (<= 1e6)");
 
         std::string used = method;
+        const std::complex<double> m(n, k);
         if (method == "auto") {
             if (radius < 0) throw cli_error("--method auto needs --radius-um (it switches at r = 2 um)");
-            used = radius < grainlight::default_switch_radius_um ? "mie" : "goa";
+            grainlight::ParticleModel model;
+            model.particle_index = m;  // --n, --k are relative to the host: host index 1 for m
+            model.host_index = 1.0;
+            const double lambda_rel = 2 * grainlight::pi_v<double> * radius / x;  // same x as above
+            used = model.method_at(radius, lambda_rel) == grainlight::ScatteringMethod::goa ? "goa" : "mie";
         }
         if (used == "goa" && n == 1.0) throw cli_error("--n = 1 has no geometric rays; use --method mie");
+        const grainlight::GoaValidity validity = grainlight::goa_validity(m, x);
 
         const auto angles = cli.list("angles", {0, 30, 60, 90, 120, 150, 180});
         for (double a : angles)
             if (!(a >= 0 && a <= 180)) throw cli_error("--angles: " + std::to_string(a) + " is not in [0, 180] degrees");
 
-        const std::complex<double> m(n, k);
         const double pi = grainlight::pi_v<double>;
         std::vector<std::complex<double>> s1, s2;
         grainlight::MieEfficiencies q;
@@ -109,9 +118,15 @@ int main(int argc, char** argv) {
             }
         } else {
             const grainlight::Goa goa(m, x, int(p_max));
-            q.qext = goa.qext();
-            q.qabs = goa.qabs();
-            q.qsca = q.qext - q.qabs;
+            if (!validity.valid)
+                std::cerr << "mie: warning: GOA is outside its validity range at x = " << x
+                          << ", phase shift 2 x |m - 1| = " << validity.phase_shift << " (valid for x >= "
+                          << validity.min_size_parameter << " and 2 x |m - 1| >= " << grainlight::goa_valid_phase_shift
+                          << "); Qext may be off by more than 15 %: use --method mie or auto\n";
+            const auto e = grainlight::goa_efficiencies(goa);  // throws where Qext or Qsca < 0
+            q.qext = e.qext;
+            q.qabs = e.qabs;
+            q.qsca = e.qsca;
             q.qback = 4 * std::norm(goa.amplitudes_at_angle(pi).S1) / (x * x);
             q.g = grainlight::goa_asymmetry_parameter(goa);
             for (double a : angles) {
@@ -151,6 +166,7 @@ int main(int argc, char** argv) {
         gl_examples::Json j;
         j.num("qext", q.qext).num("qsca", q.qsca).num("qabs", q.qabs).num("qback", q.qback).num("g", q.g);
         j.raw("S1", complex_list(s1)).raw("S2", complex_list(s2)).str("method", used);
+        j.boolean("goa_valid", validity.valid).num("phase_shift", validity.phase_shift);
         std::cout << j.str() << std::endl;
         return 0;
     });

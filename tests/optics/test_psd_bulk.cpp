@@ -86,10 +86,11 @@ TEST_CASE("Bimodal and tabulated PSDs", "[optics][psd]") {
     CHECK_THROWS_AS(TabulatedPsd(std::vector<double>{2.0, 1.0}, std::vector<double>{1.0, 1.0}), invalid_argument);
 }
 
-TEST_CASE("SingleParticle: Mie below 2 um, GOA from 2 um, Eqs. 1-3", "[optics][particle]") {
+TEST_CASE("SingleParticle: Mie below 2 um, GOA from 2 um where valid, Eqs. 1-3", "[optics][particle]") {
     ParticleModel model;
     model.particle_index = {1.33, 0.0};
-    const SingleParticle small(1.5, 0.6, model), large(2.0, 0.6, model);
+    // GOA is valid from x = 45 (test_goa_validity.cpp): r = 5 um at 0.6 um is x = 52.
+    const SingleParticle small(1.5, 0.6, model), large(5.0, 0.6, model);
     CHECK(small.method() == ScatteringMethod::mie);
     CHECK(large.method() == ScatteringMethod::goa);
     CHECK(small.size_parameter() == Approx(2 * kPi * 1.5 / 0.6));

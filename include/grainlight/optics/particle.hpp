@@ -1,7 +1,9 @@
 /// @file grainlight/optics/particle.hpp
 /// Optics of one spherical particle by radius, wavelength, particle and host index (Guo21 Sec. 3,
 /// Eqs. 1-3): exact Lorenz-Mie below a switch radius (default 2 um) and the geometrical optics
-/// approximation from it on, as the paper does (Sec. 3.3 and Sec. 6).
+/// approximation from it on, as the paper does (Sec. 3.3 and Sec. 6), but only where GOA is valid
+/// (goa_validity in goa.hpp: x >= 45, or 100 for Im m > 2, and 2 x |m - 1| >= 6); elsewhere the
+/// automatic method keeps exact Mie, which is cheap exactly where GOA fails.
 ///
 /// Units: radius and wavelength in micrometres (um), cross sections in um^2, phase function per
 /// steradian. The wavelength is the VACUUM wavelength; the wavenumber in the host is
@@ -9,6 +11,7 @@
 /// (n + i k, k >= 0 absorbs); the host index is real. Amplitude conventions: lorenz_mie.hpp.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <optional>
@@ -27,7 +30,7 @@ inline constexpr double default_switch_radius_um = 2.0;
 enum class ScatteringMethod {
     mie,        ///< exact Lorenz-Mie at every radius
     goa,        ///< geometrical optics approximation at every radius
-    automatic,  ///< Mie below the switch radius, GOA from it on (Guo21)
+    automatic,  ///< GOA from the switch radius on (Guo21) where GOA is valid (goa_validity), Mie elsewhere
 };
 
 /// Cross sections of one particle [um^2] and its asymmetry parameter.
@@ -61,10 +64,25 @@ struct ParticleModel {
     }
     /// Relative index m = particle / host.
     [[nodiscard]] std::complex<double> relative_index() const noexcept { return particle_index / host_index; }
-    /// The method used at radius r.
+    /// Guo21's rule alone: the method by the switch radius, without GOA's validity check (what
+    /// optics/bulk.hpp still uses; prefer method_at(radius, wavelength)).
     [[nodiscard]] ScatteringMethod method_at(double radius_um) const noexcept {
         if (method != ScatteringMethod::automatic) return method;
         return radius_um < switch_radius_um ? ScatteringMethod::mie : ScatteringMethod::goa;
+    }
+    /// The method used at radius r [um] and vacuum wavelength lambda [um]: automatic uses GOA only
+    /// for r >= switch_radius_um where goa_validity(m, x) holds, Mie otherwise.
+    [[nodiscard]] ScatteringMethod method_at(double radius_um, double wavelength_um) const noexcept {
+        if (method != ScatteringMethod::automatic) return method;
+        if (radius_um < switch_radius_um) return ScatteringMethod::mie;
+        const double x = 2 * pi_v<double> * host_index * radius_um / wavelength_um;
+        return goa_validity(relative_index(), x).valid ? ScatteringMethod::goa : ScatteringMethod::mie;
+    }
+    /// Smallest radius [um] from which the automatic method uses GOA at vacuum wavelength lambda
+    /// [um] (infinite when the indices match).
+    [[nodiscard]] double goa_from_radius_um(double wavelength_um) const noexcept {
+        const double x_min = goa_valid_min_size_parameter(relative_index());
+        return std::max(switch_radius_um, x_min * wavelength_um / (2 * pi_v<double> * host_index));
     }
 };
 
@@ -82,13 +100,16 @@ public:
         model.validate();
         k_ = 2 * pi_v<double> * model.host_index / wavelength_um;
         x_ = k_ * radius_um;
-        used_ = model.method_at(radius_um);
+        used_ = model.method_at(radius_um, wavelength_um);
         const auto m = model.relative_index();
+        validity_ = grainlight::goa_validity(m, x_);
         if (used_ == ScatteringMethod::mie) {
             mie_.emplace(m, x_);
             c_s_eq2_ = mie_->efficiencies().qsca * pi_v<double> * r_ * r_;
         } else {
             goa_.emplace(m, x_, model.p_max);
+            // Refuses (invalid_argument naming x and 2 x |m - 1|) where GOA's Qext or Qsca is negative.
+            goa_q_ = goa_efficiencies(*goa_);
             // Eq. 2 by quadrature (GOA is not energy-consistent: this differs from C_t - C_a).
             c_s_eq2_ = goa_intensity_moments(*goa_).i0 * pi_v<double> / (k_ * k_);
         }
@@ -100,6 +121,9 @@ public:
     [[nodiscard]] double wavenumber() const noexcept { return k_; }
     [[nodiscard]] double size_parameter() const noexcept { return x_; }
     [[nodiscard]] ScatteringMethod method() const noexcept { return used_; }
+    /// Whether GOA is valid at this (m, x) (goa.hpp); for ScatteringMethod::goa outside it the
+    /// results are computed but flagged here.
+    [[nodiscard]] const GoaValidity& goa_validity() const noexcept { return validity_; }
     [[nodiscard]] const ParticleModel& model() const noexcept { return model_; }
 
     /// S1, S2 at scattering angle theta [rad], 0 <= theta <= pi.
@@ -127,8 +151,8 @@ public:
             c.C_t = q.qext * geo;
             c.C_s = q.qsca * geo;
         } else {
-            c.C_t = goa_->qext() * geo;
-            c.C_s = c.C_t - goa_->qabs() * geo;
+            c.C_t = goa_q_.qext * geo;
+            c.C_s = goa_q_.qsca * geo;
         }
         c.C_a = c.C_t - c.C_s;
         return c;
@@ -156,6 +180,8 @@ private:
     ScatteringMethod used_ = ScatteringMethod::mie;
     std::optional<LorenzMie> mie_;
     std::optional<Goa> goa_;
+    GoaEfficiencies goa_q_;
+    GoaValidity validity_;
 };
 
 }  // namespace grainlight
