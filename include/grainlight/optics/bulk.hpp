@@ -111,7 +111,7 @@ inline constexpr double g7_w[4] = {0.129484966168869693, 0.279705391489276668, 0
 class BulkIntegrand {
 public:
     BulkIntegrand(const ParticleModel& model, double lambda_um, std::span<const double> theta)
-        : model_(model), theta_(theta.begin(), theta.end()), mu_(theta.size()) {
+        : model_(model), lambda_um_(lambda_um), theta_(theta.begin(), theta.end()), mu_(theta.size()) {
         for (std::size_t i = 0; i < theta_.size(); ++i)
             mu_[i] = i == 0 && theta_[i] == 0 ? 1.0 : (theta_[i] >= pi_v<double> ? -1.0 : std::cos(theta_[i]));
         k_ = 2 * pi_v<double> * model.host_index / lambda_um;
@@ -123,7 +123,8 @@ public:
     void operator()(double r, std::span<double> out) const {
         const double x = k_ * r, geo = pi_v<double> * r * r;
         const auto m = model_.relative_index();
-        if (model_.method_at(r) == ScatteringMethod::mie) {
+        // The automatic method: GOA only where it is valid (optics/particle.hpp, method_at).
+        if (model_.method_at(r, lambda_um_) == ScatteringMethod::mie) {
             const LorenzMie mie(m, x);
             const auto q = mie.efficiencies();
             out[0] = q.qext * geo;
@@ -142,6 +143,7 @@ public:
 
 private:
     ParticleModel model_;
+    double lambda_um_;
     std::vector<double> theta_, mu_;
     double k_ = 0;
     std::optional<GoaTable> goa_;
@@ -223,8 +225,14 @@ template <SizeDistribution Psd>
     // Segments in r: PSD breakpoints plus the switch radius.
     std::vector<double> cuts = psd.breakpoints();
     const double lo = std::max(cuts.front(), 1e-6 * cuts.back()), hi = cuts.back();
-    if (model.method == ScatteringMethod::automatic && model.switch_radius_um > lo && model.switch_radius_um < hi)
-        cuts.push_back(model.switch_radius_um);
+    if (model.method == ScatteringMethod::automatic) {
+        // The Mie -> GOA switch of every wavelength is a kink of the integrand: a panel edge.
+        if (model.switch_radius_um > lo && model.switch_radius_um < hi) cuts.push_back(model.switch_radius_um);
+        for (double l : wavelengths_um) {
+            const double r_goa = model.goa_from_radius_um(l);
+            if (std::isfinite(r_goa) && r_goa > lo && r_goa < hi) cuts.push_back(r_goa);
+        }
+    }
     for (auto& c : cuts) c = std::clamp(c, lo, hi);
     std::sort(cuts.begin(), cuts.end());
     cuts.erase(std::unique(cuts.begin(), cuts.end()), cuts.end());

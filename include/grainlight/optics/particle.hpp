@@ -64,8 +64,8 @@ struct ParticleModel {
     }
     /// Relative index m = particle / host.
     [[nodiscard]] std::complex<double> relative_index() const noexcept { return particle_index / host_index; }
-    /// Guo21's rule alone: the method by the switch radius, without GOA's validity check (what
-    /// optics/bulk.hpp still uses; prefer method_at(radius, wavelength)).
+    /// Guo21's rule alone: the method by the switch radius, without GOA's validity check (prefer
+    /// method_at(radius, wavelength), which optics/bulk.hpp uses).
     [[nodiscard]] ScatteringMethod method_at(double radius_um) const noexcept {
         if (method != ScatteringMethod::automatic) return method;
         return radius_um < switch_radius_um ? ScatteringMethod::mie : ScatteringMethod::goa;

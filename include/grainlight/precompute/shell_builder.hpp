@@ -696,7 +696,11 @@ struct ShellBuildResult {
     for (std::size_t i = 0; i < s.n_shells(); ++i) {
         t.p_unscattered.push_back(double(s.n_unscattered[i]) / N);
         t.p_absorbed.push_back(double(s.n_absorbed[i]) / N);
-        t.p_scattered.push_back(std::max(0.0, 1.0 - t.p_unscattered.back() - t.p_absorbed.back()));
+        // From the integer count of scattered paths: exactly 0 when none scattered (1 - p_u - p_a
+        // in floating point can leave a round-off residue such as 5.6e-17).
+        const std::uint64_t n_done = std::uint64_t(s.n_unscattered[i]) + std::uint64_t(s.n_absorbed[i]);
+        const std::uint64_t n_scat = s.n_paths > n_done ? s.n_paths - n_done : 0;
+        t.p_scattered.push_back(double(n_scat) / N);
     }
     t.W.resize(std::size_t(f.W.size()));
     for (Eigen::Index r = 0; r < f.W.rows(); ++r)
