@@ -1,6 +1,6 @@
 # API reference (docs/api/Doxyfile, Debian's doxygen): builds the HTML and fails when doxygen
 # reports more warnings (undocumented public symbols, documentation errors) than the recorded
-# baseline docs/api/warnings_baseline.txt (604 when added; lower it as headers get documented,
+# baseline docs/api/warnings_baseline.txt (604 when added, 773 after the merge of the rendering work; lower it as headers get documented,
 # GRAINLIGHT_API_STRICT=1 scripts/api_docs.sh requires 0). Registered only when doxygen is found.
 # Included from tests/CMakeLists.txt (this area has no C++ sources).
 find_program(GRAINLIGHT_DOXYGEN doxygen)
