@@ -9,7 +9,7 @@
 //
 //   meng15_hybrid_convergence [--quality quick|full] [--out DIR] [--seed S] [--threads N]
 //                             [--spp N] [--radius R] [--absorption A] [--width W] [--exposure EV]
-//                             [--pa-estimator paper|moments] [--preview-stride K]
+//                             [--pa-estimator paper|moments] [--preview-stride K] [--pa VALUE]
 //
 // The effective medium comes from the virtual scatterometer of the same grain
 // (precompute/scatterometer.hpp, make_effective_medium). Writes EXR + PNG per technique, a CSV of
@@ -62,6 +62,7 @@ int main(int argc, char** argv) {
             .option("width", "image width in pixels (height = 3/4 width; default 120 quick, 240 full)")
             .option("pa-estimator", "paper (Eq. 8 with Eq. 6's variances) | moments (exact roulette variance)", "paper")
             .option("preview-stride", "P_a preview: every k-th pixel in x and y (Meng15: 10, i.e. 1% of the pixels)", "10")
+            .option("pa", "pin P_a of the 'P_a opt' techniques to this value in (0, 1] (no preview; reproducible output)")
             .option("exposure", "PNG exposure in stops", "0");
         cli.finish();
         const bool full = cli.full_quality();
@@ -77,6 +78,8 @@ int main(int argc, char** argv) {
         const double exposure = cli.num("exposure", 0.0);
         const std::uint64_t preview_stride = cli.integer("preview-stride", 10);
         if (preview_stride < 1 || preview_stride > 100) throw cli_error("--preview-stride must be in [1, 100]");
+        const double pa_pinned = cli.has("pa") ? cli.num("pa", 1.0) : 0.0;
+        if (cli.has("pa") && !(pa_pinned > 0.0 && pa_pinned <= 1.0)) throw cli_error("--pa must be in (0, 1]");
         const std::string pa_estimator = cli.str("pa-estimator", "paper");
         if (pa_estimator != "paper" && pa_estimator != "moments")
             throw cli_error("--pa-estimator = '" + pa_estimator + "' must be paper or moments");
@@ -155,7 +158,10 @@ int main(int argc, char** argv) {
             opt.mode = t.mode;
             opt.ept.max_events = full ? 4096 : 1024;
             double Pa = 1.0;
-            if (t.optimal_pa) {
+            if (t.optimal_pa && pa_pinned > 0.0) {
+                Pa = pa_pinned;
+                std::printf("  %-18s P_a pinned by --pa: %.3f\n", t.name.c_str(), Pa);
+            } else if (t.optimal_pa) {
                 const gl::AcceptanceEstimate a =
                     gl::estimate_optimal_acceptance(scene_ept, scene_vpt, agg, ctx, camera, int(spp), seed + 1, threads, opt,
                                                     int(preview_stride));
