@@ -48,16 +48,8 @@ template <LitScene Scene>
     requires Medium<typename Scene::Medium>
 [[nodiscard]] inline typename Scene::Spectrum discrete_vpt_radiance(const Scene& scene, const Ray<typename Scene::Float>& ray,
                                                                     int medium, Rng& rng, const VptOptions& opt = {}) noexcept {
-    using F = typename Scene::Float;
-    using S = typename Scene::Spectrum;
     DiscreteVptCallbacks<Scene> cb{{scene, rng, opt}};
-    PathState<F, S> st = start_path<F, S>(ray, medium);
-    WalkOptions<F> wopt;
-    wopt.max_depth = opt.max_depth;
-    wopt.rr_depth = opt.rr_depth;
-    wopt.mode = TransportMode::radiance;
-    (void)walk(scene, st, rng, cb, wopt);
-    return cb.L;
+    return camera_walk(scene, ray, medium, rng, opt, cb);
 }
 
 /// Render with discrete_vpt_radiance (deterministic for any thread count: render_image).

@@ -159,14 +159,16 @@ struct VptCallbacks {
     }
 };
 
-/// Radiance arriving at the camera along `ray` (which starts in medium `medium`).
-template <LitScene Scene>
+/// One camera path (radiance transport) from `ray`, starting in medium `medium`, walked with the
+/// callback set `cb` (VptCallbacks or an extension of it that accumulates into `cb.L`); returns
+/// cb.L. The VPT of this header and the discrete-particle VPT are this walk with their callbacks.
+template <LitScene Scene, class Callbacks>
     requires Medium<typename Scene::Medium>
-[[nodiscard]] inline typename Scene::Spectrum vpt_radiance(const Scene& scene, const Ray<typename Scene::Float>& ray,
-                                                           int medium, Rng& rng, const VptOptions& opt = {}) noexcept {
+[[nodiscard]] inline typename Scene::Spectrum camera_walk(const Scene& scene, const Ray<typename Scene::Float>& ray,
+                                                          int medium, Rng& rng, const VptOptions& opt,
+                                                          Callbacks& cb) noexcept {
     using F = typename Scene::Float;
     using S = typename Scene::Spectrum;
-    VptCallbacks<Scene> cb{scene, rng, opt};
     PathState<F, S> st = start_path<F, S>(ray, medium);
     WalkOptions<F> wopt;
     wopt.max_depth = opt.max_depth;
@@ -174,6 +176,15 @@ template <LitScene Scene>
     wopt.mode = TransportMode::radiance;
     (void)walk(scene, st, rng, cb, wopt);
     return cb.L;
+}
+
+/// Radiance arriving at the camera along `ray` (which starts in medium `medium`).
+template <LitScene Scene>
+    requires Medium<typename Scene::Medium>
+[[nodiscard]] inline typename Scene::Spectrum vpt_radiance(const Scene& scene, const Ray<typename Scene::Float>& ray,
+                                                           int medium, Rng& rng, const VptOptions& opt = {}) noexcept {
+    VptCallbacks<Scene> cb{scene, rng, opt};
+    return camera_walk(scene, ray, medium, rng, opt, cb);
 }
 
 }  // namespace grainlight
