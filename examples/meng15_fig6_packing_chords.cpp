@@ -17,32 +17,25 @@
 #include <iostream>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
-#include "common/progress.hpp"
+#include "common/harness.hpp"
 #include "grainlight/core/statistics.hpp"
 #include "grainlight/packing.hpp"
 
 int main(int argc, char** argv) {
-    return gl_examples::run_main("meng15_fig6_packing_chords", [&]() -> int {
-        gl_examples::Cli cli(argc, argv, "meng15_fig6_packing_chords",
-                             "Meng15 Fig. 6 top: measured outer chord lengths vs Dixmier's model at f = 0.63");
-        cli.common_options("out");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const auto out = cli.out_dir();
-        const std::uint64_t seed = cli.seed();
-        const int threads = cli.threads();
-        (void)threads;  // used by the OpenMP pragma only
+    return gl_examples::run(argc, argv, "meng15_fig6_packing_chords",
+                            "Meng15 Fig. 6 top: measured outer chord lengths vs Dixmier's model at f = 0.63",
+                            [&](gl_examples::Example& ex) -> int {
+        ex.ready();
+        const bool full = ex.full();
+        const auto& out = ex.out();
+        const std::uint64_t seed = ex.seed();
         const double f_target = 0.63;  // Meng15 Fig. 6: "The packing rate is f = 0.63"
         const std::size_t n = full ? 8000 : 2000;
         const int blocks = 64;
         const std::uint64_t lines_per_block = full ? 400 : 60;
 
         const auto t0 = std::chrono::steady_clock::now();
-        gl_examples::ProgressBar bar("pack + chords", 2 * blocks);
         const auto res = grainlight::md_pack(n, f_target, seed);
-        bar.advance(blocks);
         // Unit-radius spheres.
         const double s = 1.0 / res.tile.radius();
         std::vector<grainlight::Vec3d> centers = res.tile.centers();
@@ -52,53 +45,40 @@ int main(int argc, char** argv) {
         const double lambda_b = grainlight::dixmier_mean_chord(1.0, f);
 
         // Measurement: blocks of random lines, reduced in block order (thread-count independent).
-        const double z_max = 5.0;
-        const std::size_t bins = 100;
-        std::vector<grainlight::Histogram> hist(blocks, grainlight::Histogram(0.0, z_max, bins));
-        std::vector<grainlight::ChordMeasurement> parts(blocks);
-        std::vector<grainlight::Welford> complete(blocks);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-        for (int b = 0; b < blocks; ++b) {
-            grainlight::Rng rng = grainlight::Rng::from_key(seed, 0x66696736ull /* "fig6" */, std::uint64_t(b));
-            auto& h = hist[std::size_t(b)];
-            auto& w = complete[std::size_t(b)];
-            parts[std::size_t(b)] = grainlight::measure_outer_chords(tile, lines_per_block, 100.0 * lambda_b, rng,
-                                                                     [&](double z) {
-                                                                         h.add(z);
-                                                                         w.add(z);
-                                                                     });
-            bar.advance();
-        }
-        bar.done();
-        grainlight::Histogram total_h(0.0, z_max, bins);
-        grainlight::ChordMeasurement total;
-        grainlight::Welford total_w;
-        for (int b = 0; b < blocks; ++b) {
-            total_h.merge(hist[std::size_t(b)]);
-            total.merge(parts[std::size_t(b)]);
-            total_w.merge(complete[std::size_t(b)]);
-        }
+        constexpr double z_max = 5.0;
+        constexpr std::size_t bins = 100;
+        struct Part {
+            grainlight::Histogram h{0.0, z_max, bins};
+            grainlight::ChordMeasurement chords{};
+            grainlight::Welford complete{};
+        };
+        const Part total = ex.parallel<Part>(
+            "chords", std::uint64_t(blocks), 1,
+            [&](std::uint64_t b, std::uint64_t, std::uint64_t) {
+                Part p;
+                grainlight::Rng rng = grainlight::Rng::from_key(seed, 0x66696736ull /* "fig6" */, b);
+                p.chords = grainlight::measure_outer_chords(tile, lines_per_block, 100.0 * lambda_b, rng, [&](double z) {
+                    p.h.add(z);
+                    p.complete.add(z);
+                });
+                return p;
+            },
+            [](Part& acc, const Part& p) {
+                acc.h.merge(p.h);
+                acc.chords.merge(p.chords);
+                acc.complete.merge(p.complete);
+            });
+        const grainlight::Histogram& total_h = total.h;
+        const grainlight::Welford& total_w = total.complete;
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
         gl_examples::Csv csv({"z_over_R", "measured_pdf", "dixmier_pdf"});
         for (std::size_t i = 0; i < bins; ++i)
             csv.row({total_h.bin_center(i), total_h.density(i), grainlight::dixmier_pdf(total_h.bin_center(i), 1.0, f)});
-        const auto csv_path = out / "meng15_fig6_packing_chords.csv";
-        csv.write(csv_path);
-        const auto png = out / "meng15_fig6_packing_chords.png";
+        const auto csv_path = ex.csv("meng15_fig6_packing_chords.csv", csv);
         char lam[64];
         std::snprintf(lam, sizeof lam, "%.6f", lambda_b);
-        gl_examples::plot_with_matplotlib(
-            out / "meng15_fig6_packing_chords.py",
-            "d = read_csv(r'''" + csv_path.string() + "''')\n"
-            "fig, ax = plt.subplots(figsize=(6, 4))\n"
-            "ax.plot(d['z_over_R'], d['measured_pdf'], label='Monte Carlo (MD packing, f = 0.63)')\n"
-            "ax.plot(d['z_over_R'], d['dixmier_pdf'], '--', label='Dixmier (Meng15 Eq. 1)')\n"
-            "ax.axvline(" + std::string(lam) + ", color='k', lw=0.8, label='mean 4R(1-f)/(3f)')\n"
-            "ax.set_xlabel('outer chord length z / R'); ax.set_ylabel('p_b(z) R')\n"
-            "ax.set_title('Meng15 Fig. 6 (top): outer chord lengths, f = 0.63'); ax.legend()\n"
-            "fig.tight_layout(); fig.savefig(png, dpi=120)\n",
-            png);
+        ex.plot("meng15_fig6_packing_chords", csv_path, out / "meng15_fig6_packing_chords.png", {lam});
 
         // Short chords: measured fraction below 0.1 R vs the exponential model.
         double short_measured = 0;
@@ -107,23 +87,22 @@ int main(int argc, char** argv) {
         const double short_dixmier = grainlight::dixmier_cdf(0.1, 1.0, f);
 
         std::printf("Meng15 Fig. 6 (top), f = %.4f (target 0.63), %zu spheres, %llu chords, %.2f s\n", f, n,
-                    static_cast<unsigned long long>(total.entries), seconds);
+                    static_cast<unsigned long long>(total.chords.entries), seconds);
         std::printf("  mean outer chord / R: measured %.4f   analytic 4(1-f)/(3f) = %.4f (Meng15 Eq. 1)   ratio %.4f\n",
-                    total.mean(), lambda_b, total.mean() / lambda_b);
+                    total.chords.mean(), lambda_b, total.chords.mean() / lambda_b);
         std::printf("  complete-chord mean / R: %.4f (length-biased slightly low by the line ends)\n", total_w.mean());
         std::printf("  chords shorter than 0.1 R: measured %.4f   exponential model %.4f (paper: the model is "
                     "incorrect below ~1 R)\n",
                     short_measured, short_dixmier);
-        gl_examples::Json j;
+        gl_examples::Json j = ex.summary();
         j.num("fraction", f)
             .integer("spheres", (long long)n)
-            .num("mean_chord", total.mean())
+            .num("mean_chord", total.chords.mean())
             .num("dixmier_mean_chord", lambda_b)
             .num("short_chord_fraction_measured", short_measured)
             .num("short_chord_fraction_dixmier", short_dixmier)
-            .integer("chords", (long long)total.entries)
+            .integer("chords", (long long)total.chords.entries)
             .num("seconds", seconds);
-        std::cout << j.str() << std::endl;
-        return 0;
+        return ex.finish(j);
     });
 }

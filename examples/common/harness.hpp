@@ -130,11 +130,15 @@ public:
     /// Draw `png` from `csv` with examples/plots/<script>.py (Debian's /usr/bin/python3 +
     /// matplotlib, or $GRAINLIGHT_PYTHON). Returns false with a note when matplotlib is missing:
     /// the CSV is the result, the plot a bonus.
-    bool plot(const std::string& script, const std::filesystem::path& csv_path, const std::filesystem::path& png) const {
+    /// `args` are passed after CSV and PNG (numbers the plot annotates).
+    bool plot(const std::string& script, const std::filesystem::path& csv_path, const std::filesystem::path& png,
+              const std::vector<std::string>& args = {}) const {
         const std::filesystem::path py = std::filesystem::path(GRAINLIGHT_EXAMPLES_DIR) / "plots" / (script + ".py");
         const char* python = std::getenv("GRAINLIGHT_PYTHON");
         const std::string interp = python ? python : "/usr/bin/python3";
-        const std::string cmd = interp + " '" + py.string() + "' '" + csv_path.string() + "' '" + png.string() + "' 2>&1";
+        std::string cmd = interp + " '" + py.string() + "' '" + csv_path.string() + "' '" + png.string() + "'";
+        for (const auto& a : args) cmd += " '" + a + "'";
+        cmd += " 2>&1";
         FILE* p = popen(cmd.c_str(), "r");
         if (!p) return false;
         std::string output;
