@@ -72,7 +72,6 @@ public:
         seed_ = cli_.seed();
         threads_ = cli_.threads();
         out_ = cli_.out_dir(default_out());
-        ready_ = true;
     }
 
     [[nodiscard]] bool full() const { return full_; }
@@ -189,7 +188,7 @@ private:
     }
     Cli cli_;
     std::string program_, command_;
-    bool full_ = false, ready_ = false;
+    bool full_ = false;
     std::uint64_t seed_ = 1;
     int threads_ = 1;
     std::filesystem::path out_;

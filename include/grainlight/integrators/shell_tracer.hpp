@@ -140,41 +140,26 @@ public:
     /// independent). `stats` (optional) receives the step counts.
     [[nodiscard]] SlabTally run(std::uint64_t first, std::uint64_t count, std::uint64_t seed,
                                 ShellSwitchStats* stats = nullptr) const noexcept {
-        SlabTally tally;
-        const double mu0 = params().mu0;
-        const Vec3d d(std::sqrt(std::max(0.0, 1.0 - mu0 * mu0)), 0.0, -mu0);
-        WalkOptions<F> opt;
-        opt.mode = TransportMode::importance;
         const MediumType& m = scene_.medium(0);
-        for (std::uint64_t i = first; i < first + count; ++i) {
-            Rng rng = Rng::from_key(seed, i, 0);
-            Scorer sc{&m, stats};
-            PathState<F, S> st = start_path<F, S>(Ray<F>(Vec3d(0.0, 0.0, 1.0), d), -1);
-            (void)walk(scene_, st, rng, sc, opt);
-            tally.R.add(sc.r);
-            tally.T.add(sc.t);
-            ++tally.paths;
-        }
-        return tally;
+        return run_slab_paths(scene_, params().mu0, first, count, seed, [&] {
+            Scorer sc;
+            sc.m = &m;
+            sc.stats = stats;
+            return sc;
+        });
     }
 
 private:
-    struct Scorer {
+    /// SlabProblem's R/T scorer plus the shell / exact step counts.
+    struct Scorer : SlabScorer<F, S> {
         const MediumType* m = nullptr;
         ShellSwitchStats* stats = nullptr;
-        double r = 0, t = 0;
         void on_segment(const PathState<F, S>& st, F) noexcept {
             if (!stats || st.medium < 0) return;
             if (m->uses_shell(st.ray.o))
                 ++stats->shell_steps;
             else
                 ++stats->exact_steps;
-        }
-        void on_escape(const PathState<F, S>& st) noexcept {
-            if (st.ray.d.z > 0)
-                r += st.throughput[0];
-            else
-                t += st.throughput[0];
         }
     };
     SlabProblem problem_;

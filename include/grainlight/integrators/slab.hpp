@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cmath>
+#include <algorithm>
 #include <cstdint>
 
 #include "grainlight/core/error.hpp"
@@ -24,6 +25,44 @@
 #include "grainlight/scene/slab.hpp"
 
 namespace grainlight {
+
+/// Walk callbacks of a slab photon: R collects what leaves the lit side (z > 0 going up), T what
+/// leaves the far side. Scorers with more callbacks derive from it.
+template <class F, class S>
+struct SlabScorer {
+    double r = 0, t = 0;
+    void on_escape(const PathState<F, S>& st) noexcept {
+        if (st.ray.d.z > 0)
+            r += st.throughput[0];
+        else
+            t += st.throughput[0];
+    }
+};
+
+/// Photon paths [first, first + count) through a slab scene under collimated incidence at
+/// cos(theta) = mu0, importance transport, generators Pcg32::from_key(seed, path, 0): the result for
+/// a path index does not depend on how the caller splits the range. `make_scorer()` returns a
+/// fresh scorer (a SlabScorer or one derived from it) per path.
+template <WalkScene Scene, class MakeScorer>
+[[nodiscard]] SlabTally run_slab_paths(const Scene& scene, double mu0, std::uint64_t first, std::uint64_t count,
+                                       std::uint64_t seed, MakeScorer&& make_scorer) noexcept {
+    using F = typename Scene::Float;
+    using S = typename Scene::Spectrum;
+    SlabTally tally;
+    const Vec3<F> d(std::sqrt(std::max(0.0, 1.0 - mu0 * mu0)), 0.0, -mu0);
+    WalkOptions<F> opt;
+    opt.mode = TransportMode::importance;
+    for (std::uint64_t i = first; i < first + count; ++i) {
+        Rng rng = Rng::from_key(seed, i, 0);
+        auto sc = make_scorer();
+        PathState<F, S> st = start_path<F, S>(Ray<F>(Vec3<F>(0.0, 0.0, 1.0), d), -1);
+        (void)walk(scene, st, rng, sc, opt);
+        tally.R.add(sc.r);
+        tally.T.add(sc.t);
+        ++tally.paths;
+    }
+    return tally;
+}
 
 /// The slab problem: validated parameters, the medium (sigma_t = 1, so thickness = B), the
 /// scene, and the photon-walk estimator.
@@ -46,33 +85,10 @@ public:
     /// Pcg32::from_key(seed, path, 0): the result for a path index does not depend on how the
     /// caller splits the range into batches or threads.
     [[nodiscard]] SlabTally run(std::uint64_t first, std::uint64_t count, std::uint64_t seed) const noexcept {
-        SlabTally tally;
-        const double mu0 = params_.mu0;
-        const Vec3<F> d(std::sqrt(std::max(0.0, 1.0 - mu0 * mu0)), 0.0, -mu0);
-        WalkOptions<F> opt;
-        opt.mode = TransportMode::importance;
-        for (std::uint64_t i = first; i < first + count; ++i) {
-            Rng rng = Rng::from_key(seed, i, 0);
-            Scorer sc;
-            PathState<F, S> st = start_path<F, S>(Ray<F>(Vec3<F>(0.0, 0.0, 1.0), d), -1);
-            (void)walk(scene_, st, rng, sc, opt);
-            tally.R.add(sc.r);
-            tally.T.add(sc.t);
-            ++tally.paths;
-        }
-        return tally;
+        return run_slab_paths(scene_, params_.mu0, first, count, seed, [] { return SlabScorer<F, S>{}; });
     }
 
 private:
-    struct Scorer {
-        double r = 0, t = 0;
-        void on_escape(const PathState<F, S>& st) noexcept {
-            if (st.ray.d.z > 0)
-                r += st.throughput[0];
-            else
-                t += st.throughput[0];
-        }
-    };
     static SlabParams validate(const SlabParams& p) {
         check_argument(p.albedo >= 0.0 && p.albedo <= 1.0, "slab", "albedo", p.albedo, "[0, 1]");
         check_argument(p.optical_depth > 0.0, "slab", "optical_depth", p.optical_depth, "(0, inf] (inf = semi-infinite)");
