@@ -30,7 +30,9 @@ namespace grainlight {
 /// leaves the far side. Scorers with more callbacks derive from it.
 template <class F, class S>
 struct SlabScorer {
-    double r = 0, t = 0;
+    double r = 0;  ///< weight that left the lit side
+    double t = 0;  ///< weight that left the far side
+    /// Walk callback: score an escaping path by the side it leaves.
     void on_escape(const PathState<F, S>& st) noexcept {
         if (st.ray.d.z > 0)
             r += st.throughput[0];
