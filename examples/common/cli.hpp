@@ -65,6 +65,28 @@ public:
         option("threads", "worker threads (0 = all cores)", "0");
         return *this;
     }
+    /// The options of resumable renders: --checkpoint SECONDS and --resume (see checkpoint.hpp).
+    Cli& checkpoint_options() {
+        option("checkpoint", "write the render's state to --out every SECONDS (resumable with --resume)");
+        option("resume", "continue from the checkpoint in --out (a fresh render when there is none)");
+        return *this;
+    }
+    /// A 64-bit fingerprint (FNV-1a) of the program name and every argument given except `ignore`
+    /// (options that do not change the result: output directory, threads, checkpointing).
+    [[nodiscard]] std::uint64_t fingerprint(const std::set<std::string>& ignore) const {
+        std::uint64_t h = 0xcbf29ce484222325ull;
+        auto mix = [&](const std::string& s) {
+            for (unsigned char c : s) h = (h ^ c) * 0x100000001b3ull;
+            h = (h ^ 0xffu) * 0x100000001b3ull;  // separator
+        };
+        mix(program_);
+        for (const auto& [k, v] : args_)  // std::map: sorted, so the order of arguments does not matter
+            if (!ignore.count(k)) {
+                mix(k);
+                mix(v);
+            }
+        return h;
+    }
     /// Call after declaring options: prints help and exits, or rejects unknown options.
     void finish() {
         if (help_) {

@@ -14,6 +14,8 @@
 #include <utility>
 #include <vector>
 
+#include "grainlight/core/serialization.hpp"
+
 namespace gl_examples {
 
 /// One JSON object built field by field; str() gives a single line.
@@ -63,16 +65,9 @@ private:
     std::string body_;
 };
 
-/// Write `text` to `path` atomically (temporary file + rename).
+/// Write `text` to `path` atomically (temporary file + rename: grainlight::write_file_atomic).
 inline void write_text_atomic(const std::filesystem::path& path, const std::string& text) {
-    const auto tmp = path.string() + ".tmp";
-    {
-        std::ofstream f(tmp, std::ios::binary);
-        if (!f) throw std::runtime_error("cannot write '" + tmp + "'");
-        f << text;
-        if (!f) throw std::runtime_error("write failed for '" + tmp + "'");
-    }
-    std::filesystem::rename(tmp, path);
+    grainlight::write_file_atomic(path, text.data(), text.size());
 }
 
 /// A CSV table: header + rows of numbers (or strings).

@@ -43,3 +43,12 @@ if(TARGET vpt_sphere_medium OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_S
   add_test(NAME vpt_sphere_medium_bad_quality_exit COMMAND $<TARGET_FILE:vpt_sphere_medium> --quality fast --spp 1)
   set_tests_properties(vpt_sphere_medium_bad_quality_exit PROPERTIES WILL_FAIL TRUE LABELS "example;integrators")
 endif()
+
+# Resumable renders (hardening issue): abort hook + real SIGKILL, resumed byte-identical.
+if(TARGET vpt_sphere_medium OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/vpt_sphere_medium.cpp))
+  add_test(NAME vpt_sphere_medium_resume
+           COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/integrators/resume.sh $<TARGET_FILE:vpt_sphere_medium>
+                   ${CMAKE_CURRENT_BINARY_DIR}/resume_work)
+  set_tests_properties(vpt_sphere_medium_resume PROPERTIES LABELS "example;integrators;checkpoint" TIMEOUT 300
+    PASS_REGULAR_EXPRESSION "byte-identical to the uninterrupted render; foreign checkpoint refused")
+endif()

@@ -578,8 +578,14 @@ template <LitScene Scene, BoundaryShape Shape, class Camera, class Progress = No
                 const Vec2<F> u = rng.uniform2<F>();
                 const auto ray = camera.generate_ray(F(x) + u.x, F(y) + u.y);
                 auto L = ept_radiance(scene, agg, ray, rng, opt);
-                if (!L.low.is_finite()) L.low = decltype(L.low)(0);
-                if (!L.high.is_finite()) L.high = decltype(L.high)(0);
+                if (!L.low.is_finite()) {  // counted (Film::nonfinite_samples), replaced by zero
+                    img.low.add_nonfinite(x, y);
+                    L.low = decltype(L.low)(0);
+                }
+                if (!L.high.is_finite()) {
+                    img.high.add_nonfinite(x, y);
+                    L.high = decltype(L.high)(0);
+                }
                 img.low.add_sample(x, y, L.low);
                 img.high.add_sample(x, y, L.high);
                 row_rays[std::size_t(y)] += L.grain_rays;

@@ -4,23 +4,53 @@
 /// Pcg32::from_key(seed, pixel, sample) per pixel sample, each pixel owned by one thread and its
 /// samples added in sample order: the image is bit-identical for any thread count.
 ///
+/// Long renders can checkpoint: with RenderOptions::checkpoint.path set, the driver writes the
+/// film's accumulators and the finished rows atomically (scene/film_checkpoint.hpp) whenever a row
+/// finishes and `interval_seconds` have passed since the last write, and with `resume` it starts
+/// from that file. Each row's samples depend only on (seed, pixel, sample index), so a killed and
+/// resumed render is bit-identical to an uninterrupted one. Non-finite samples (NaN/Inf) are
+/// counted per pixel in the film (Film::nonfinite_samples) and replaced by zero.
+///
 /// A camera is anything with `width()`, `height()` and `generate_ray(px, py)` (continuous film
 /// coordinates, scene/camera.hpp). A radiance function is `L(ray, rng) -> Spectrum<1 or 3>`.
 #pragma once
 
+#include <atomic>
+#include <chrono>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <filesystem>
+#include <mutex>
+#include <system_error>
 #include <utility>
+#include <vector>
 
 #include "grainlight/core/error.hpp"
 #include "grainlight/core/rng.hpp"
 #include "grainlight/integrators/vpt.hpp"
 #include "grainlight/scene/film.hpp"
+#include "grainlight/scene/film_checkpoint.hpp"
 
 #if defined(_OPENMP)
 #include <omp.h>
 #endif
 
 namespace grainlight {
+
+/// Checkpointing of a render (see the file comment). Disabled while `path` is empty.
+struct CheckpointOptions {
+    std::filesystem::path path;      ///< checkpoint file (empty: no checkpoints)
+    double interval_seconds = 60.0;  ///< minimum time between two writes (>= 0; 0 = after every row)
+    bool resume = false;             ///< start from `path` when it exists (a fresh render otherwise)
+    std::uint64_t key = 0;           ///< fingerprint of everything else that fixes the image; a
+                                     ///< checkpoint with another key, seed, spp or size is refused
+    bool remove_when_done = true;    ///< delete the checkpoint once the render has finished
+                                     ///< (false: leave a checkpoint of the whole finished film)
+    int abort_after_writes = 0;      ///< test hook: end the process (exit code 86) right after this
+                                     ///< many checkpoint writes, as a crash would (0 = never)
+};
 
 /// Options of a render.
 struct RenderOptions {
@@ -29,10 +59,69 @@ struct RenderOptions {
     int threads = 0;             ///< worker threads (0 = OpenMP default; ignored without OpenMP)
     int camera_medium = -1;      ///< medium the camera sits in (-1 = none)
     VptOptions vpt{};            ///< integrator options (render_vpt)
+    CheckpointOptions checkpoint{};  ///< periodic checkpoints and resume (off by default)
 };
+
+namespace detail {
+
+/// The film a render starts from: a checkpoint's when resuming from a matching one, else black.
+/// Throws invalid_argument naming the mismatch when the checkpoint belongs to another render.
+inline FilmCheckpoint start_checkpoint(int w, int h, const RenderOptions& opt) {
+    const auto& c = opt.checkpoint;
+    if (!c.path.empty() && c.resume && std::filesystem::exists(c.path)) {
+        FilmCheckpoint ck = FilmCheckpoint::load(c.path);
+        auto refuse = [&](const std::string& what, std::uint64_t have, std::uint64_t want) {
+            raise_error<invalid_argument>("render_image: checkpoint '" + c.path.string() + "' was written by another render (" +
+                                          what + " " + std::to_string(have) + ", this render " + std::to_string(want) +
+                                          "); delete it or run without resume");
+        };
+        if (ck.film.width() != w) refuse("width", std::uint64_t(ck.film.width()), std::uint64_t(w));
+        if (ck.film.height() != h) refuse("height", std::uint64_t(ck.film.height()), std::uint64_t(h));
+        if (ck.seed != opt.seed) refuse("seed", ck.seed, opt.seed);
+        if (ck.spp != std::uint64_t(opt.spp)) refuse("spp", ck.spp, std::uint64_t(opt.spp));
+        if (ck.key != c.key) refuse("key", ck.key, c.key);
+        return ck;
+    }
+    FilmCheckpoint ck;
+    ck.seed = opt.seed;
+    ck.spp = std::uint64_t(opt.spp);
+    ck.key = c.key;
+    ck.rows_done.assign(std::size_t(h), 0);
+    ck.film = Film(w, h);
+    return ck;
+}
+
+/// A snapshot of the finished rows of `film` (rows in flight stay zero), as a checkpoint.
+inline FilmCheckpoint snapshot_checkpoint(const Film& film, const std::vector<std::atomic<std::uint8_t>>& done,
+                                          const FilmCheckpoint& meta) {
+    const int w = film.width(), h = film.height();
+    const std::size_t n = std::size_t(w) * std::size_t(h);
+    std::vector<double> sums(3 * n, 0.0), weights(n, 0.0);
+    std::vector<std::uint32_t> nonfinite(n, 0u);
+    FilmCheckpoint ck;
+    ck.seed = meta.seed;
+    ck.spp = meta.spp;
+    ck.key = meta.key;
+    ck.rows_done.assign(std::size_t(h), 0);
+    for (int y = 0; y < h; ++y) {
+        if (!done[std::size_t(y)].load(std::memory_order_acquire)) continue;
+        ck.rows_done[std::size_t(y)] = 1;
+        const std::size_t p0 = std::size_t(y) * std::size_t(w);
+        for (std::size_t i = p0; i < p0 + std::size_t(w); ++i) {
+            for (std::size_t k = 0; k < 3; ++k) sums[3 * i + k] = film.sums()[3 * i + k];
+            weights[i] = film.weights()[i];
+            nonfinite[i] = film.nonfinite_counts()[i];
+        }
+    }
+    ck.film = Film::from_accumulators(w, h, std::move(sums), std::move(weights), std::move(nonfinite));
+    return ck;
+}
+
+}  // namespace detail
 
 /// A progress sink that ignores progress.
 struct NoProgress {
+    /// Ignore `rows_done` finished rows.
     void operator()(int /*rows_done*/) const noexcept {}
 };
 
@@ -43,14 +132,31 @@ template <class Camera, class Radiance, class Progress = NoProgress>
                                 Progress&& progress = {}) {
     check_argument(opt.spp >= 1, "render_image", "spp", opt.spp, ">= 1");
     check_argument(opt.threads >= 0, "render_image", "threads", opt.threads, ">= 0");
+    check_argument(opt.checkpoint.interval_seconds >= 0.0, "render_image", "checkpoint.interval_seconds",
+                   opt.checkpoint.interval_seconds, ">= 0");
     using F = typename Camera::Float;
+    using Clock = std::chrono::steady_clock;
     const int w = camera.width(), h = camera.height();
-    Film film(w, h);
+    const CheckpointOptions& cko = opt.checkpoint;
+    const bool checkpointing = !cko.path.empty();
+    FilmCheckpoint start = detail::start_checkpoint(w, h, opt);
+    Film film = std::move(start.film);
+    std::vector<std::atomic<std::uint8_t>> done(static_cast<std::size_t>(h));
+    for (int y = 0; y < h; ++y) done[std::size_t(y)].store(start.rows_done[std::size_t(y)]);
+    std::mutex writer;
+    auto last_write = Clock::now();
+    int writes = 0;
+    std::exception_ptr failure;
+    std::atomic<bool> failed{false};
 #if defined(_OPENMP)
     const int nt = opt.threads > 0 ? opt.threads : omp_get_max_threads();
 #pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
 #endif
     for (int y = 0; y < h; ++y) {
+        if (done[std::size_t(y)].load(std::memory_order_relaxed) || failed.load(std::memory_order_relaxed)) {
+            progress(1);
+            continue;
+        }
         for (int x = 0; x < w; ++x) {
             const std::uint64_t pixel = std::uint64_t(y) * std::uint64_t(w) + std::uint64_t(x);
             for (int s = 0; s < opt.spp; ++s) {
@@ -58,11 +164,47 @@ template <class Camera, class Radiance, class Progress = NoProgress>
                 const Vec2<F> u = rng.uniform2<F>();
                 const auto ray = camera.generate_ray(F(x) + u.x, F(y) + u.y);
                 auto L = radiance(ray, rng);
-                if (!L.is_finite()) L = decltype(L)(0);  // never let one NaN sample poison a pixel
+                if (!L.is_finite()) {  // counted, never allowed to poison a pixel
+                    film.add_nonfinite(x, y);
+                    L = decltype(L)(0);
+                }
                 film.add_sample(x, y, L);
             }
         }
+        done[std::size_t(y)].store(1, std::memory_order_release);
+        if (checkpointing) {
+            std::unique_lock lock(writer, std::try_to_lock);
+            if (lock.owns_lock() && !failed.load() &&
+                std::chrono::duration<double>(Clock::now() - last_write).count() >= cko.interval_seconds) {
+#if GRAINLIGHT_HAS_EXCEPTIONS
+                try {  // an exception must not leave the parallel region: rethrown after it
+                    detail::snapshot_checkpoint(film, done, start).save(cko.path);
+                } catch (...) {
+                    failure = std::current_exception();
+                    failed.store(true);
+                }
+#else
+                detail::snapshot_checkpoint(film, done, start).save(cko.path);  // aborts on failure
+#endif
+                last_write = Clock::now();
+                if (cko.abort_after_writes > 0 && ++writes >= cko.abort_after_writes) {
+                    std::fflush(nullptr);
+                    std::_Exit(86);
+                }
+            }
+        }
         progress(1);
+    }
+#if GRAINLIGHT_HAS_EXCEPTIONS
+    if (failure) std::rethrow_exception(failure);
+#endif
+    if (checkpointing) {
+        if (cko.remove_when_done) {
+            std::error_code ec;
+            std::filesystem::remove(cko.path, ec);
+        } else {
+            detail::snapshot_checkpoint(film, done, start).save(cko.path);  // the finished film
+        }
     }
     return film;
 }

@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "grainlight/core/error.hpp"
+#include "grainlight/core/serialization.hpp"
 #include "grainlight/scene/film.hpp"
 
 namespace grainlight {
@@ -45,9 +46,9 @@ inline void commit_temp_file(const std::filesystem::path& tmp, const std::filesy
     }
 }
 
-inline std::filesystem::path temp_path_for(const std::filesystem::path& path) {
-    return std::filesystem::path(path.string() + ".tmp");
-}
+/// A temporary name next to `path`, unique per process and call (the same scheme as the
+/// container writer), so two writers of one target never share a temporary file.
+inline std::filesystem::path temp_path_for(const std::filesystem::path& path) { return temporary_path_for(path); }
 
 /// Linear -> sRGB transfer function (IEC 61966-2-1), input clamped to [0, 1].
 [[nodiscard]] inline double srgb_encode(double v) noexcept {
