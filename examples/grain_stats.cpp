@@ -12,7 +12,11 @@
 // has radius R <= 1. --albedo and --interior-sigma-* take one value or r,g,b. Writes the
 // per-channel phase table (CSV), a PNG plot of it and the statistics file (.scat) into --out.
 // The last line of stdout is one JSON object:
-//   {"beta":..,"lambda_delta":..,"lambda_s":..,"alpha_s":..,"g":..}
+//   {"beta":..,"lambda_delta":..,"lambda_s":..,"alpha_s":..,"g":..,"ranks":..,"rank_blocks":[..]}
+// Built with MPI, `mpirun -np K grain_stats ...` gives rank r a contiguous range of the
+// scatterometer's ray blocks; rank 0 appends the ranks' tallies in order, so the .scat file is
+// byte-identical to a single-process run with the same seed.
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -21,6 +25,7 @@
 #include <vector>
 
 #include "common/cli.hpp"
+#include "common/mpi.hpp"
 #include "common/output.hpp"
 #include "common/progress.hpp"
 #include "grainlight/precompute/scatterometer.hpp"
@@ -37,10 +42,38 @@ gl::RGBd rgb_option(const Cli& cli, const std::string& name, double def) {
     throw cli_error("--" + name + " takes one value or three (r,g,b)");
 }
 
+// A tally as bytes (for the gather on rank 0): first block, block partials, then the counts.
+std::vector<unsigned char> encode_tally(const gl::ScatterometerTally& t) {
+    gl::ByteWriter w;
+    w.put(t.first_block).put(std::uint64_t(t.blocks.size()));
+    w.put_array(t.blocks.data(), t.blocks.size());
+    const auto& c = t.counts;
+    w.put(c.hits).put(c.exits).put(c.terminated);
+    w.put_array(c.chord.data(), c.chord.size());
+    for (std::size_t k = 0; k < 3; ++k) w.put_array(c.phase[k].data(), c.phase[k].size());
+    for (std::size_t k = 0; k < 3; ++k) w.put_array(c.tt[k].data(), c.tt[k].size());
+    return w.take();
+}
+gl::ScatterometerTally decode_tally(const std::vector<unsigned char>& bytes, const gl::ScatterometerGrid& grid) {
+    gl::ByteReader r(bytes, "scatterometer tally from another rank");
+    gl::ScatterometerTally t(grid, r.get<std::uint64_t>());
+    r.get_array(t.blocks, r.get<std::uint64_t>());
+    auto& c = t.counts;
+    c.hits = r.get<std::uint64_t>();
+    c.exits = r.get<decltype(c.exits)>();
+    c.terminated = r.get<decltype(c.terminated)>();
+    r.get_array(c.chord, c.chord.size());
+    for (std::size_t k = 0; k < 3; ++k) r.get_array(c.phase[k], c.phase[k].size());
+    for (std::size_t k = 0; k < 3; ++k) r.get_array(c.tt[k], c.tt[k].size());
+    r.expect_end();
+    return t;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
     return run_main("grain_stats", [&] {
+        MpiSession mpi(argc, argv);  // one rank without mpirun (or without MPI)
         Cli cli(argc, argv, "grain_stats", "virtual scatterometer statistics of one grain (Meng15 Sec. 4.2, Table 1)");
         cli.common_options("out/grain_stats");
         cli.option("preset", "glass-bead|snow|salt|sugar|brown-sugar|sand|flour|rice (a Table 1 grain)")
@@ -83,16 +116,24 @@ int main(int argc, char** argv) {
         if (level > 7) throw cli_error("--mesh-level must be <= 7");
         auto run = [&](const gl::GrainPreset& g) {
             const auto scat = gl::ScatterometerGrain::procedural(g.shape, g.radius, g.material, g.seed, int(level));
-            ProgressBar bar("scatterometer " + g.name, cfg.rays);
+            // This rank's contiguous share of the ray blocks (all of them on one rank).
+            const auto [b0, b1] = mpi.block_range(gl::scatterometer_blocks(cfg.rays));
+            constexpr std::uint64_t bs = gl::ScatterometerTally::block_size;
+            ProgressBar bar("scatterometer " + g.name, std::min(cfg.rays, b1 * bs) - std::min(cfg.rays, b0 * bs));
+            bar.quiet(!mpi.root());
             std::uint64_t last = 0;
             cfg.progress = [&](std::uint64_t done, std::uint64_t) {
                 bar.advance(done - last);
                 last = done;
             };
-            auto st = gl::run_scatterometer(scat, cfg);
+            const auto mine = gl::run_scatterometer_blocks(scat, cfg, b0, b1);
+            const auto all = mpi.gather_bytes(encode_tally(mine));  // rank 0: every rank's, in rank order
             bar.done();
             secs += bar.seconds();
-            return st;
+            if (!mpi.root()) return gl::GrainStats{};
+            gl::ScatterometerTally tally = mpi.size() == 1 ? mine : decode_tally(all[0], cfg.grid);
+            for (int r = 1; r < mpi.size(); ++r) tally.append(decode_tally(all[std::size_t(r)], cfg.grid));
+            return gl::finish_scatterometer(cfg, tally);
         };
         const bool by_shape = cli.has("shape");
         if (int(cli.has("load")) + int(cli.has("preset")) + int(by_shape) != 1)
@@ -145,6 +186,7 @@ int main(int argc, char** argv) {
             parts.push_back(run(grain));
             names.push_back(grain.name);
         }
+        if (!mpi.root()) return 0;  // rank 0 mixes, writes and prints
         if (parts.empty()) throw cli_error("nothing to do: empty --preset/--load list");
         if (parts.size() > 1 && !cli.has("weights"))
             throw cli_error("a list of " + std::to_string(parts.size()) + " grains needs --weights (one per grain)");
@@ -217,7 +259,18 @@ int main(int argc, char** argv) {
             .num("lambda_delta", stats.lambda_delta())
             .num("lambda_s", stats.lambda_s_avg())
             .num("alpha_s", stats.alpha_s_avg())
-            .num("g", stats.g_avg());
+            .num("g", stats.g_avg())
+            .integer("ranks", mpi.size());
+        if (source.empty()) {          // the scatterometer ran (not --load)
+            std::vector<double> ranges;  // [begin, end) ray-block range of each rank
+            const auto nb = gl::scatterometer_blocks(cfg.rays);
+            for (int r = 0; r < mpi.size(); ++r) {
+                const auto [b0, b1] = mpi.block_range_of(r, nb);
+                ranges.push_back(double(b0));
+                ranges.push_back(double(b1));
+            }
+            j.nums("rank_blocks", ranges);
+        }
         std::cout << j.str() << std::endl;
         return 0;
     });

@@ -15,9 +15,12 @@
 #include <filesystem>
 #include <cstdint>
 #include <iostream>
+#include <string>
+#include <vector>
 
 #include "common/checkpoint.hpp"
 #include "common/cli.hpp"
+#include "common/mpi.hpp"
 #include "common/output.hpp"
 #include "common/progress.hpp"
 #include "grainlight/integrators/render.hpp"
@@ -32,6 +35,7 @@ namespace gl = grainlight;
 
 int main(int argc, char** argv) {
     return gl_examples::run_main("vpt_sphere_medium", [&]() -> int {
+        gl_examples::MpiSession mpi(argc, argv);  // one rank without mpirun (or without MPI)
         gl_examples::Cli cli(argc, argv, "vpt_sphere_medium",
                              "render a dielectric sphere of scattering medium on a diffuse ground (EXR + PNG)");
         cli.common_options("out/vpt_sphere_medium")
@@ -74,15 +78,24 @@ int main(int argc, char** argv) {
         opt.seed = cli.seed();
         opt.threads = threads;
         opt.vpt.max_depth = 512;
-        opt.checkpoint = gl_examples::checkpoint_from_cli(cli, out / "vpt_sphere_medium.checkpoint");
+        opt.row_offset = mpi.rank();  // rank r renders the rows y % ranks == r
+        opt.row_stride = mpi.size();
+        const std::string rank_tag =
+            mpi.size() > 1 ? ".rank" + std::to_string(mpi.rank()) + "of" + std::to_string(mpi.size()) : "";
+        opt.checkpoint = gl_examples::checkpoint_from_cli(cli, out / ("vpt_sphere_medium" + rank_tag + ".checkpoint"));
         const int resumed_rows = opt.checkpoint.resume && std::filesystem::exists(opt.checkpoint.path)
                                      ? gl::FilmCheckpoint::load(opt.checkpoint.path).rows_finished()
                                      : 0;
         gl_examples::ProgressBar bar("vpt_sphere_medium", std::uint64_t(height));
+        bar.quiet(!mpi.root());
         const auto t0 = std::chrono::steady_clock::now();
-        const gl::Film film = gl::render_vpt(scene, camera, opt, [&](int n) { bar.advance(std::uint64_t(n)); });
+        const gl::Film local = gl::render_vpt(scene, camera, opt, [&](int n) { bar.advance(std::uint64_t(n)); });
+        const gl::Film film = mpi.gather_film_rows(local);  // rank 0: every rank's rows
         bar.done();
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        if (!mpi.root()) return 0;
+        std::vector<double> rank_rows;
+        for (int r = 0; r < mpi.size(); ++r) rank_rows.push_back(double((height - r + mpi.size() - 1) / mpi.size()));
 
         const gl::Image img = film.image();
         const auto exr = out / "vpt_sphere_medium.exr";
@@ -100,6 +113,9 @@ int main(int argc, char** argv) {
             .num("seconds", seconds)
             .num("paths_per_second", paths / seconds)
             .integer("threads", threads)
+            .integer("ranks", mpi.size())
+            .str("rank_rows", "rank r renders the rows y with y % ranks == r")
+            .nums("rank_row_counts", rank_rows)
             .integer("nonfinite_samples", (long long)film.nonfinite_samples())
             .integer("resumed_rows", resumed_rows)
             .str("exr", exr.string())

@@ -14,11 +14,12 @@ PACKAGES=(
   catch2 libbenchmark-dev
   python3-matplotlib
 )
-# Optional: the Python module (pybind11 + numpy, tested with pytest), the Embree adapter and the
-# API reference (doxygen).
+# Optional: the Python module (pybind11 + numpy, tested with pytest), the Embree adapter, MPI
+# scale-out of the examples (OpenMPI) and the API reference (doxygen).
 OPTIONAL_PACKAGES=(
   pybind11-dev python3-dev python3-numpy python3-pytest
   libembree-dev
+  libopenmpi-dev openmpi-bin
   doxygen
 )
 if [ "${GRAINLIGHT_OPTIONAL:-1}" = "0" ]; then OPTIONAL_PACKAGES=(); fi

@@ -17,18 +17,23 @@ public:
         : label_(std::move(label)), total_(total ? total : 1), start_(clock::now()), tty_(isatty(2)) {}
     ~ProgressBar() { done(); }
 
+    /// A quiet bar counts but never draws (e.g. on every MPI rank but the first).
+    ProgressBar& quiet(bool q = true) {
+        quiet_ = q;
+        return *this;
+    }
     /// Add `n` finished units (any thread).
     void advance(std::uint64_t n = 1) {
         const auto cur = done_.fetch_add(n) + n;
         const auto now = clock::now();
         std::unique_lock lock(mutex_, std::try_to_lock);
-        if (!lock.owns_lock()) return;
+        if (!lock.owns_lock() || quiet_) return;
         if (now - last_ < std::chrono::milliseconds(tty_ ? 100 : 2000) && cur < total_) return;
         last_ = now;
         draw(cur);
     }
     void done() {
-        if (finished_.exchange(true)) return;
+        if (finished_.exchange(true) || quiet_) return;
         draw(total_);
         std::fputc('\n', stderr);
     }
@@ -58,6 +63,7 @@ private:
     clock::time_point start_, last_{};
     std::mutex mutex_;
     bool tty_;
+    bool quiet_ = false;
 };
 
 }  // namespace gl_examples

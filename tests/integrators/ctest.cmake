@@ -52,3 +52,13 @@ if(TARGET vpt_sphere_medium OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_S
   set_tests_properties(vpt_sphere_medium_resume PROPERTIES LABELS "example;integrators;checkpoint" TIMEOUT 300
     PASS_REGULAR_EXPRESSION "byte-identical to the uninterrupted render; foreign checkpoint refused")
 endif()
+
+# MPI scale-out (ecosystem issue): 2 ranks give the single-process EXR byte for byte.
+if(TARGET MPI::MPI_CXX AND MPIEXEC_EXECUTABLE AND GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/vpt_sphere_medium.cpp)
+  add_test(NAME vpt_sphere_medium_mpi
+           COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/common/mpi_compare.sh ${MPIEXEC_EXECUTABLE} 2
+                   ${CMAKE_CURRENT_BINARY_DIR}/mpi_vpt_work vpt_sphere_medium.exr $<TARGET_FILE:vpt_sphere_medium>
+                   --quality quick --seed 1)
+  set_tests_properties(vpt_sphere_medium_mpi PROPERTIES LABELS "example;integrators;mpi" TIMEOUT 300
+    PASS_REGULAR_EXPRESSION "byte-identical to one process")
+endif()

@@ -57,3 +57,14 @@ if(TARGET grain_stats OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_
   set_tests_properties(grain_stats_negative_weight PROPERTIES PASS_REGULAR_EXPRESSION "weights\\[1\\] = -0.5"
                        LABELS "example;precompute")
 endif()
+
+# MPI scale-out of a precomputation (ecosystem issue): the scatterometer's ray blocks over 3
+# ranks (more ranks than cores: --oversubscribe) give the single-process statistics file byte for byte.
+if(TARGET MPI::MPI_CXX AND MPIEXEC_EXECUTABLE AND GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/grain_stats.cpp)
+  add_test(NAME grain_stats_mpi
+           COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/common/mpi_compare.sh ${MPIEXEC_EXECUTABLE} 3
+                   ${CMAKE_CURRENT_BINARY_DIR}/mpi_grain_stats_work grain_stats_snow.scat $<TARGET_FILE:grain_stats>
+                   --preset snow --rays 100000 --seed 4)
+  set_tests_properties(grain_stats_mpi PROPERTIES LABELS "example;precompute;mpi" TIMEOUT 300
+    PASS_REGULAR_EXPRESSION "byte-identical to one process")
+endif()

@@ -60,6 +60,8 @@ struct RenderOptions {
     int camera_medium = -1;      ///< medium the camera sits in (-1 = none)
     VptOptions vpt{};            ///< integrator options (render_vpt)
     CheckpointOptions checkpoint{};  ///< periodic checkpoints and resume (off by default)
+    int row_offset = 0;  ///< render only the rows y with y % row_stride == row_offset: one of
+    int row_stride = 1;  ///< row_stride processes' share (MPI ranks); other rows stay empty
 };
 
 namespace detail {
@@ -134,6 +136,9 @@ template <class Camera, class Radiance, class Progress = NoProgress>
     check_argument(opt.threads >= 0, "render_image", "threads", opt.threads, ">= 0");
     check_argument(opt.checkpoint.interval_seconds >= 0.0, "render_image", "checkpoint.interval_seconds",
                    opt.checkpoint.interval_seconds, ">= 0");
+    check_argument(opt.row_stride >= 1, "render_image", "row_stride", opt.row_stride, ">= 1");
+    check_argument(opt.row_offset >= 0 && opt.row_offset < opt.row_stride, "render_image", "row_offset",
+                   opt.row_offset, "[0, row_stride)");
     using F = typename Camera::Float;
     using Clock = std::chrono::steady_clock;
     const int w = camera.width(), h = camera.height();
@@ -153,7 +158,8 @@ template <class Camera, class Radiance, class Progress = NoProgress>
 #pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
 #endif
     for (int y = 0; y < h; ++y) {
-        if (done[std::size_t(y)].load(std::memory_order_relaxed) || failed.load(std::memory_order_relaxed)) {
+        if (y % opt.row_stride != opt.row_offset || done[std::size_t(y)].load(std::memory_order_relaxed) ||
+            failed.load(std::memory_order_relaxed)) {
             progress(1);
             continue;
         }

@@ -179,19 +179,61 @@ struct ScatterCounts {
 
 }  // namespace detail
 
-/// Run the virtual scatterometer (Meng15 Sec. 4.1-4.2) on `grain`. Throws
-/// grainlight::invalid_argument for rays == 0 or a bad grid.
-[[nodiscard]] inline GrainStats run_scatterometer(const ScatterometerGrain& grain, const ScatterometerConfig& cfg) {
+/// The raw tally of a contiguous range of the scatterometer's ray blocks: the floating-point
+/// partial sums of every block (kept per block so that they are summed in block order, whoever
+/// computed them) and the integer counts (order-independent). Splitting a run into block ranges
+/// (threads, processes, MPI ranks), concatenating the ranges in order with `append` and calling
+/// finish_scatterometer gives bit-identical statistics to one run_scatterometer call.
+struct ScatterometerTally {
+    /// Rays per block: ray i belongs to block i / block_size.
+    static constexpr std::uint64_t block_size = 4096;
+    std::uint64_t first_block = 0;              ///< index of blocks[0]
+    std::vector<detail::ScatterBlock> blocks;   ///< per-block floating-point partials, in block order
+    detail::ScatterCounts counts;               ///< integer counts of the whole range
+
+    /// An empty tally starting at block `first` for `grid`.
+    ScatterometerTally(const ScatterometerGrid& grid, std::uint64_t first) : first_block(first), counts(grid) {}
+    /// One past the last block covered.
+    [[nodiscard]] std::uint64_t end_block() const noexcept { return first_block + blocks.size(); }
+    /// Append the tally of the next block range (must start where this one ends; same grid).
+    void append(const ScatterometerTally& next) {
+        check_argument(next.first_block == end_block(), "ScatterometerTally::append", "next.first_block",
+                       next.first_block, "== this tally's end_block()");
+        check_argument(next.counts.chord.size() == counts.chord.size() &&
+                           next.counts.tt[0].size() == counts.tt[0].size() &&
+                           next.counts.phase[0].size() == counts.phase[0].size(),
+                       "ScatterometerTally::append", "next grid", next.counts.tt[0].size(), "the same grid");
+        blocks.insert(blocks.end(), next.blocks.begin(), next.blocks.end());
+        counts.add(next.counts);
+    }
+};
+
+/// Number of ray blocks of a scatterometer run of `rays` rays.
+[[nodiscard]] constexpr std::uint64_t scatterometer_blocks(std::uint64_t rays) noexcept {
+    return (rays + ScatterometerTally::block_size - 1) / ScatterometerTally::block_size;
+}
+
+/// Trace the ray blocks [block_begin, block_end) of the scatterometer run `cfg` (rays keyed by
+/// their global index, so the result does not depend on how the run is split). Throws
+/// grainlight::invalid_argument for rays == 0, a bad grid or a block range outside the run.
+[[nodiscard]] inline ScatterometerTally run_scatterometer_blocks(const ScatterometerGrain& grain,
+                                                                 const ScatterometerConfig& cfg,
+                                                                 std::uint64_t block_begin, std::uint64_t block_end) {
     check_argument(cfg.rays >= 1, "run_scatterometer", "rays", cfg.rays, ">= 1");
     check_argument(cfg.max_bounces >= 1, "run_scatterometer", "max_bounces", cfg.max_bounces, ">= 1");
     grain.material().check_channels(GrainStats::channels, "run_scatterometer");
     cfg.grid.validate();
+    const std::uint64_t all_blocks = scatterometer_blocks(cfg.rays);
+    check_argument(block_begin <= block_end && block_end <= all_blocks, "run_scatterometer_blocks", "block range end",
+                   block_end, "block_begin <= block_end <= scatterometer_blocks(rays)");
     const ScatterometerGrid grid = cfg.grid;
     const bool grey = grain.material().is_grey();
-    constexpr std::uint64_t block_size = 4096;
-    const std::uint64_t n_blocks = (cfg.rays + block_size - 1) / block_size;
-    std::vector<detail::ScatterBlock> blocks(static_cast<std::size_t>(n_blocks));
-    detail::ScatterCounts total(grid);
+    constexpr std::uint64_t block_size = ScatterometerTally::block_size;
+    const std::uint64_t n_blocks = block_end - block_begin;
+    ScatterometerTally tally(grid, block_begin);
+    tally.blocks.resize(static_cast<std::size_t>(n_blocks));
+    std::vector<detail::ScatterBlock>& blocks = tally.blocks;
+    detail::ScatterCounts& total = tally.counts;
     std::uint64_t done = 0;
 
 #if defined(_OPENMP)
@@ -204,7 +246,8 @@ struct ScatterCounts {
 #endif
         for (std::int64_t b = 0; b < std::int64_t(n_blocks); ++b) {
             detail::ScatterBlock& blk = blocks[std::size_t(b)];
-            const std::uint64_t begin = std::uint64_t(b) * block_size, end = std::min(cfg.rays, begin + block_size);
+            const std::uint64_t begin = (block_begin + std::uint64_t(b)) * block_size,
+                                end = std::min(cfg.rays, begin + block_size);
             for (std::uint64_t i = begin; i < end; ++i) {
                 Rng rng = Rng::from_key(cfg.seed, i, 0);
                 // Incident ray: uniform direction, uniform point on the cross-section disk.
@@ -277,7 +320,7 @@ struct ScatterCounts {
 #endif
                 {
                     done += end - begin;
-                    cfg.progress(done, cfg.rays);
+                    cfg.progress(done, std::min(cfg.rays, block_end * block_size) - block_begin * block_size);
                 }
             }
         }
@@ -286,10 +329,20 @@ struct ScatterCounts {
 #endif
         total.add(local);
     }
+    return tally;
+}
 
+/// The statistics of a complete run from its tally (all blocks, in order). Throws
+/// grainlight::invalid_argument when the tally does not cover every block of `cfg`.
+[[nodiscard]] inline GrainStats finish_scatterometer(const ScatterometerConfig& cfg, const ScatterometerTally& tally) {
+    check_argument(tally.first_block == 0 && tally.end_block() == scatterometer_blocks(cfg.rays),
+                   "finish_scatterometer", "tally blocks", tally.end_block() - tally.first_block,
+                   "every block of the run, from block 0");
+    const ScatterometerGrid grid = cfg.grid;
+    const detail::ScatterCounts& total = tally.counts;
     // Fixed-order reduction of the floating-point partials.
     detail::ScatterBlock sum;
-    for (const auto& b : blocks) {
+    for (const auto& b : tally.blocks) {
         sum.miss_chord += b.miss_chord;
         sum.miss_chord2 += b.miss_chord2;
         for (std::size_t c = 0; c < 3; ++c) {
@@ -321,6 +374,12 @@ struct ScatterCounts {
         for (std::size_t i = 0; i < grid.tt_cells(); ++i) s.tt_table[c][i] = double(total.tt[c][i]) * inv_n;
     }
     return s;
+}
+
+/// Run the virtual scatterometer (Meng15 Sec. 4.1-4.2) on `grain`. Throws
+/// grainlight::invalid_argument for rays == 0 or a bad grid.
+[[nodiscard]] inline GrainStats run_scatterometer(const ScatterometerGrain& grain, const ScatterometerConfig& cfg) {
+    return finish_scatterometer(cfg, run_scatterometer_blocks(grain, cfg, 0, scatterometer_blocks(cfg.rays)));
 }
 
 }  // namespace grainlight

@@ -1,0 +1,150 @@
+// examples/common/mpi.hpp: optional MPI scale-out of the example programs. Built with MPI
+// (GRAINLIGHT_EXAMPLES_MPI, CMake option GRAINLIGHT_WITH_MPI, on when OpenMPI is found) the same
+// binaries split their work over the ranks of `mpirun -np K` and reduce it on rank 0 in a fixed
+// order, so the output is bit-identical to a single-process run with the same seed (the keyed
+// generators make every sample independent of who computes it). Without MPI, or run without
+// mpirun, everything is one rank. Only rank 0 writes files and prints the JSON summary.
+//
+// Work splits: renders give rank r the rows y with y % K == r (RenderOptions::row_offset /
+// row_stride: interleaved rows balance a centred object), precomputations a contiguous block range
+// (block_range). Reductions: gather_bytes collects each rank's serialized partial on rank 0 in rank
+// order; gather_film_rows assembles a film from the ranks' rows (a placement, not a sum).
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+#include <exception>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "grainlight/scene/film.hpp"
+
+#if defined(GRAINLIGHT_EXAMPLES_MPI)
+#include <mpi.h>
+#endif
+
+namespace gl_examples {
+
+/// MPI for the lifetime of the object (MPI_Init / MPI_Finalize when built with MPI).
+class MpiSession {
+public:
+    MpiSession(int& argc, char**& argv) {
+#if defined(GRAINLIGHT_EXAMPLES_MPI)
+        int inited = 0;
+        MPI_Initialized(&inited);
+        if (!inited) {
+            MPI_Init(&argc, &argv);
+            owns_ = true;
+        }
+        MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+        MPI_Comm_size(MPI_COMM_WORLD, &size_);
+#else
+        (void)argc;
+        (void)argv;
+#endif
+    }
+    ~MpiSession() {
+#if defined(GRAINLIGHT_EXAMPLES_MPI)
+        // A rank leaving by an exception would leave the others waiting in a collective: abort all.
+        if (size_ > 1 && std::uncaught_exceptions() > 0) MPI_Abort(MPI_COMM_WORLD, 1);
+        if (owns_) MPI_Finalize();
+#endif
+    }
+    MpiSession(const MpiSession&) = delete;
+    MpiSession& operator=(const MpiSession&) = delete;
+
+    /// This process's rank (0 without MPI).
+    [[nodiscard]] int rank() const noexcept { return rank_; }
+    /// Number of ranks (1 without MPI).
+    [[nodiscard]] int size() const noexcept { return size_; }
+    /// Rank 0 writes outputs and prints.
+    [[nodiscard]] bool root() const noexcept { return rank_ == 0; }
+    /// The contiguous share [begin, end) of `count` items for this rank (balanced to one item).
+    [[nodiscard]] std::pair<std::uint64_t, std::uint64_t> block_range(std::uint64_t count) const noexcept {
+        const auto k = std::uint64_t(size_), r = std::uint64_t(rank_);
+        return {count * r / k, count * (r + 1) / k};
+    }
+    /// The share of rank r (for reporting).
+    [[nodiscard]] std::pair<std::uint64_t, std::uint64_t> block_range_of(int r, std::uint64_t count) const noexcept {
+        const auto k = std::uint64_t(size_), rr = std::uint64_t(r);
+        return {count * rr / k, count * (rr + 1) / k};
+    }
+
+    /// Collect every rank's bytes on rank 0, in rank order (other ranks get an empty list).
+    [[nodiscard]] std::vector<std::vector<unsigned char>> gather_bytes(const std::vector<unsigned char>& mine) const {
+        std::vector<std::vector<unsigned char>> all;
+#if defined(GRAINLIGHT_EXAMPLES_MPI)
+        if (size_ > 1) {
+            const auto n = static_cast<unsigned long long>(mine.size());
+            std::vector<unsigned long long> sizes(std::size_t(size_), 0);
+            MPI_Gather(&n, 1, MPI_UNSIGNED_LONG_LONG, sizes.data(), 1, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
+            // Chunks below 2^30 bytes keep MPI's int counts valid for any partial size.
+            constexpr unsigned long long chunk = 1ull << 30;
+            if (root()) {
+                all.resize(std::size_t(size_));
+                all[0] = mine;
+                for (int r = 1; r < size_; ++r) {
+                    auto& buf = all[std::size_t(r)];
+                    buf.resize(std::size_t(sizes[std::size_t(r)]));
+                    for (unsigned long long off = 0; off < buf.size(); off += chunk)
+                        MPI_Recv(buf.data() + off, int(std::min<unsigned long long>(chunk, buf.size() - off)), MPI_BYTE, r,
+                                 0, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+                }
+            } else {
+                for (unsigned long long off = 0; off < mine.size(); off += chunk)
+                    MPI_Send(mine.data() + off, int(std::min<unsigned long long>(chunk, mine.size() - off)), MPI_BYTE, 0, 0,
+                             MPI_COMM_WORLD);
+            }
+            return all;
+        }
+#endif
+        all.push_back(mine);
+        return all;
+    }
+
+    /// The film of a render whose rows were split with row_offset = rank, row_stride = size():
+    /// on rank 0 the complete film (row y from rank y % size()), elsewhere an empty film.
+    [[nodiscard]] grainlight::Film gather_film_rows(const grainlight::Film& local) const {
+        if (size_ == 1) return local;
+        const int w = local.width(), h = local.height();
+        // Only this rank's rows travel: per row 3w sums, w weights, w non-finite counts.
+        std::vector<unsigned char> mine;
+        for (int y = rank_; y < h; y += size_) append_row(local, y, mine);
+        const auto all = gather_bytes(mine);
+        if (!root()) return {};
+        const std::size_t n = std::size_t(w) * std::size_t(h);
+        std::vector<double> sums(3 * n), weights(n);
+        std::vector<std::uint32_t> nonfinite(n);
+        for (int r = 0; r < size_; ++r) {
+            const unsigned char* p = all[std::size_t(r)].data();
+            for (int y = r; y < h; y += size_) {
+                const std::size_t i0 = std::size_t(y) * std::size_t(w);
+                std::memcpy(sums.data() + 3 * i0, p, 3 * std::size_t(w) * sizeof(double));
+                p += 3 * std::size_t(w) * sizeof(double);
+                std::memcpy(weights.data() + i0, p, std::size_t(w) * sizeof(double));
+                p += std::size_t(w) * sizeof(double);
+                std::memcpy(nonfinite.data() + i0, p, std::size_t(w) * sizeof(std::uint32_t));
+                p += std::size_t(w) * sizeof(std::uint32_t);
+            }
+        }
+        return grainlight::Film::from_accumulators(w, h, std::move(sums), std::move(weights), std::move(nonfinite));
+    }
+
+private:
+    static void append_row(const grainlight::Film& f, int y, std::vector<unsigned char>& out) {
+        const std::size_t w = std::size_t(f.width()), i0 = std::size_t(y) * w;
+        auto put = [&](const void* src, std::size_t bytes) {
+            const auto* b = static_cast<const unsigned char*>(src);
+            out.insert(out.end(), b, b + bytes);
+        };
+        put(f.sums().data() + 3 * i0, 3 * w * sizeof(double));
+        put(f.weights().data() + i0, w * sizeof(double));
+        put(f.nonfinite_counts().data() + i0, w * sizeof(std::uint32_t));
+    }
+    int rank_ = 0, size_ = 1;
+    bool owns_ = false;
+};
+
+}  // namespace gl_examples
