@@ -36,7 +36,13 @@ public:
     Json& nums(const std::string& key, const std::vector<double>& v) {
         std::ostringstream os;
         os << "[" << std::setprecision(10);
-        for (std::size_t i = 0; i < v.size(); ++i) os << (i ? "," : "") << (std::isfinite(v[i]) ? v[i] : 0.0);
+        for (std::size_t i = 0; i < v.size(); ++i) {  // non-finite -> null, as in num(): never a silent 0
+            os << (i ? "," : "");
+            if (std::isfinite(v[i]))
+                os << v[i];
+            else
+                os << "null";
+        }
         os << "]";
         return raw(key, os.str());
     }
