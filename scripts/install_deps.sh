@@ -15,11 +15,13 @@ PACKAGES=(
   python3-matplotlib
 )
 # Optional: the Python module (pybind11 + numpy, tested with pytest), the Embree adapter, MPI
-# scale-out of the examples (OpenMPI) and the API reference (doxygen).
+# scale-out of the examples (OpenMPI), the third-party baselines of bench_third_party
+# (tinyobjloader, nlohmann-json) and the API reference (doxygen).
 OPTIONAL_PACKAGES=(
   pybind11-dev python3-dev python3-numpy python3-pytest
   libembree-dev
   libopenmpi-dev openmpi-bin
+  libtinyobjloader-dev nlohmann-json3-dev
   doxygen
 )
 if [ "${GRAINLIGHT_OPTIONAL:-1}" = "0" ]; then OPTIONAL_PACKAGES=(); fi
