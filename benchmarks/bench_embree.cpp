@@ -1,0 +1,269 @@
+// Grain traversal against Embree 3 (the kernels issue, item 4): the same procedural snow grains
+// (one exemplar mesh, 320 triangles, randomly rotated per grain), once as Meng15 Algorithm 1
+// (traversal/aggregate.hpp: O(1) memory in the grain count) and once instanced in Embree (one
+// RTC_GEOMETRY_TYPE_INSTANCE per grain over a sub-scene holding the exemplar mesh: Embree's
+// two-level BVH, the standard way to put many copies of a mesh into an Embree scene), the same
+// rays, one thread, single incoherent rays (rtcIntersect1), hits checked equal.
+// Built only when find_package(embree 3) succeeds (Debian: libembree-dev).
+//
+//   taskset -c 1 bench_embree --benchmark_filter='/[56]$'   1e5 and 1e6 grains
+//   taskset -c 1 bench_embree --benchmark_filter='/7$'      1e7 grains (Embree ~3.6 GB, 10-20 s build)
+//
+// Counters: memory_MB (Algorithm 1: its own count of tile + voxels + exemplar BVH bytes; Embree:
+// the growth of the process's resident size while the instances are built and committed),
+// build_s, grains, hit_rate; BM_EmbreeCheckSameHits: mismatches among 8192 rays (first grain or
+// distance beyond float round-off differs).
+#include <benchmark/benchmark.h>
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "grainlight/core/rng.hpp"
+#include "grainlight/core/warp.hpp"
+#include "grainlight/geometry/grains.hpp"
+#include "grainlight/packing/md_packer.hpp"
+#include "grainlight/traversal/aggregate.hpp"
+
+using namespace grainlight;
+
+namespace {
+
+using Agg = GranularAggregate<SphereBoundary>;
+constexpr std::uint64_t kGrainSeed = 7;
+constexpr int kGrainLevel = 2;
+
+/// Resident set size of this process in bytes (Linux /proc/self/statm).
+double resident_bytes() {
+    std::ifstream f("/proc/self/statm");
+    double pages_total = 0, pages_resident = 0;
+    f >> pages_total >> pages_resident;
+    return pages_resident * 4096.0;
+}
+
+const PeriodicTile& unit_tile() {
+    static const PeriodicTile tile = [] {
+        const auto packed = md_pack(200, 0.6, 1);
+        const double s = 1.0 / packed.tile.radius();
+        std::vector<Vec3d> c = packed.tile.centers();
+        for (auto& x : c) x *= s;
+        return PeriodicTile(packed.tile.side() * s, 1.0, std::move(c));
+    }();
+    return tile;
+}
+double boundary_radius(double n) { return std::cbrt(n / unit_tile().packing_fraction()); }
+
+const TriangleMesh<float>& exemplar_mesh() {
+    static const TriangleMesh<float> m = make_grain_mesh<float>(GrainShape::snow, 1.0f, kGrainSeed, kGrainLevel);
+    return m;
+}
+
+const Agg& aggregate(int lg) {
+    static std::map<int, std::unique_ptr<Agg>> cache;
+    auto& p = cache[lg];
+    if (!p) {
+        const double rb = boundary_radius(std::pow(10.0, lg));
+        std::vector<Grain> ex = {Grain::mesh(exemplar_mesh(), GrainMaterial::make_dielectric(1.31))};
+        p = std::make_unique<Agg>(unit_tile(), VoxelizedBoundary<SphereBoundary>(SphereBoundary(Vec3d(0.0), rb), unit_tile().side()),
+                                  ex, std::vector<double>{1.0}, 3);
+    }
+    return *p;
+}
+
+/// The same grains instanced in Embree.
+struct EmbreeGrains {
+    RTCDevice device = nullptr;
+    RTCScene mesh_scene = nullptr, scene = nullptr;
+    std::vector<AggregateGrain> grains;  // instID -> grain
+    double build_seconds = 0, memory_bytes = 0;
+
+    explicit EmbreeGrains(const Agg& agg, double rb) {
+        const double rss0 = resident_bytes();
+        const auto t0 = std::chrono::steady_clock::now();
+        device = rtcNewDevice("threads=1");
+        mesh_scene = rtcNewScene(device);
+        const auto& m = exemplar_mesh();
+        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                              3 * sizeof(float), m.vertices.size()));
+        for (std::size_t i = 0; i < m.vertices.size(); ++i) {
+            v[3 * i] = m.vertices[i].x;
+            v[3 * i + 1] = m.vertices[i].y;
+            v[3 * i + 2] = m.vertices[i].z;
+        }
+        auto* ix = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                  3 * sizeof(unsigned), m.triangles.size()));
+        for (std::size_t i = 0; i < m.triangles.size(); ++i)
+            for (int k = 0; k < 3; ++k) ix[3 * i + std::size_t(k)] = m.triangles[i][k];
+        rtcCommitGeometry(g);
+        rtcAttachGeometry(mesh_scene, g);
+        rtcReleaseGeometry(g);
+        rtcCommitScene(mesh_scene);
+
+        scene = rtcNewScene(device);
+        const double R = agg.grain_radius();
+        agg.for_each_grain(Vec3d(-rb - 2), Vec3d(rb + 2), [&](const AggregateGrain& gr, const Vec3d& c) {
+            RTCGeometry inst = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+            rtcSetGeometryInstancedScene(inst, mesh_scene);
+            // x_world = c + R * rotation.to_world(x_unit): columns R r0, R r1, R r2, c.
+            const float xfm[12] = {float(R * gr.rotation.r0.x), float(R * gr.rotation.r0.y), float(R * gr.rotation.r0.z),
+                                   float(R * gr.rotation.r1.x), float(R * gr.rotation.r1.y), float(R * gr.rotation.r1.z),
+                                   float(R * gr.rotation.r2.x), float(R * gr.rotation.r2.y), float(R * gr.rotation.r2.z),
+                                   float(c.x),                  float(c.y),                  float(c.z)};
+            rtcSetGeometryTransform(inst, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, xfm);
+            rtcCommitGeometry(inst);
+            rtcAttachGeometryByID(scene, inst, unsigned(grains.size()));
+            rtcReleaseGeometry(inst);
+            grains.push_back(gr);
+        });
+        rtcCommitScene(scene);
+        build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        memory_bytes = resident_bytes() - rss0;
+    }
+    ~EmbreeGrains() {
+        if (scene) rtcReleaseScene(scene);
+        if (mesh_scene) rtcReleaseScene(mesh_scene);
+        if (device) rtcReleaseDevice(device);
+    }
+    /// First hit: (grain index or -1, t).
+    [[nodiscard]] std::pair<long long, double> intersect(const Vec3d& o, const Vec3d& d) const noexcept {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        RTCRayHit rh{};
+        rh.ray.org_x = float(o.x);
+        rh.ray.org_y = float(o.y);
+        rh.ray.org_z = float(o.z);
+        rh.ray.dir_x = float(d.x);
+        rh.ray.dir_y = float(d.y);
+        rh.ray.dir_z = float(d.z);
+        rh.ray.tnear = 0.0f;
+        rh.ray.tfar = 1e30f;
+        rh.ray.mask = 0xffffffffu;
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(scene, &ctx, &rh);
+        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {-1, 0.0};
+        return {(long long)rh.hit.instID[0], double(rh.ray.tfar)};
+    }
+};
+
+const EmbreeGrains& embree(int lg) {
+    static std::map<int, std::unique_ptr<EmbreeGrains>> cache;
+    auto& p = cache[lg];
+    if (!p) p = std::make_unique<EmbreeGrains>(aggregate(lg), boundary_radius(std::pow(10.0, lg)));
+    return *p;
+}
+
+struct Rays {
+    std::vector<Vec3d> o, d;
+};
+/// Camera-like rays: from outside toward random points of the inner half (as bench_aggregates).
+Rays camera_rays(double rb, std::size_t n) {
+    Rays r;
+    Rng rng = Rng::from_key(5);
+    for (std::size_t i = 0; i < n; ++i) {
+        const Vec3d o = 1.5 * rb * sample_uniform_sphere(rng.uniform2<double>());
+        const Vec3d t = 0.5 * rb * rng.uniform<double>() * sample_uniform_sphere(rng.uniform2<double>());
+        r.o.push_back(o);
+        r.d.push_back(glm::normalize(t - o));
+    }
+    return r;
+}
+/// Interior rays: random points inside, random directions (a path inside the material).
+Rays interior_rays(double rb, std::size_t n) {
+    Rays r;
+    Rng rng = Rng::from_key(6);
+    for (std::size_t i = 0; i < n; ++i) {
+        r.o.push_back(0.8 * rb * std::cbrt(rng.uniform<double>()) * sample_uniform_sphere(rng.uniform2<double>()));
+        r.d.push_back(sample_uniform_sphere(rng.uniform2<double>()));
+    }
+    return r;
+}
+
+template <bool Interior>
+void BM_Algorithm1(benchmark::State& st) {
+    const int lg = int(st.range(0));
+    const Agg& agg = aggregate(lg);
+    const double rb = boundary_radius(std::pow(10.0, lg));
+    const Rays rays = Interior ? interior_rays(rb, 4096) : camera_rays(rb, 4096);
+    std::size_t i = 0, hits = 0;
+    for (auto _ : st) {
+        const AggregateHit h = agg.intersect(rays.o[i], rays.d[i], 0.0, 1e30);
+        hits += h.hit;
+        benchmark::DoNotOptimize(h);
+        i = (i + 1) % rays.o.size();
+    }
+    st.SetItemsProcessed(std::int64_t(st.iterations()));
+    st.counters["memory_MB"] = double(agg.memory_bytes()) / 1e6;
+    st.counters["hit_rate"] = double(hits) / double(st.iterations());
+}
+
+template <bool Interior>
+void BM_Embree(benchmark::State& st) {
+    const int lg = int(st.range(0));
+    const EmbreeGrains& e = embree(lg);
+    const double rb = boundary_radius(std::pow(10.0, lg));
+    const Rays rays = Interior ? interior_rays(rb, 4096) : camera_rays(rb, 4096);
+    std::size_t i = 0, hits = 0;
+    for (auto _ : st) {
+        const auto h = e.intersect(rays.o[i], rays.d[i]);
+        hits += h.first >= 0;
+        benchmark::DoNotOptimize(h);
+        i = (i + 1) % rays.o.size();
+    }
+    st.SetItemsProcessed(std::int64_t(st.iterations()));
+    st.counters["memory_MB"] = e.memory_bytes / 1e6;
+    st.counters["build_s"] = e.build_seconds;
+    st.counters["grains"] = double(e.grains.size());
+    st.counters["hit_rate"] = double(hits) / double(st.iterations());
+}
+
+/// Not timed: both return the same first grain at the same distance (float round-off) for 4096
+/// camera and 4096 interior rays.
+void BM_EmbreeCheckSameHits(benchmark::State& st) {
+    const int lg = int(st.range(0));
+    const Agg& agg = aggregate(lg);
+    const EmbreeGrains& e = embree(lg);
+    const double rb = boundary_radius(std::pow(10.0, lg));
+    std::int64_t mismatches = 0, hits = 0;
+    for (auto _ : st) {
+        mismatches = hits = 0;
+        for (const Rays& rays : {camera_rays(rb, 4096), interior_rays(rb, 4096)})
+            for (std::size_t k = 0; k < rays.o.size(); ++k) {
+                const AggregateHit a = agg.intersect(rays.o[k], rays.d[k], 0.0, 1e30);
+                const auto b = e.intersect(rays.o[k], rays.d[k]);
+                hits += a.hit;
+                bool same = a.hit == (b.first >= 0);
+                if (same && a.hit) {
+                    const AggregateGrain& g = e.grains[std::size_t(b.first)];
+                    same = g.sphere == a.grain.sphere && g.tile == a.grain.tile &&
+                           std::abs(b.second - a.t) <= 1e-4 * (1.0 + a.t);
+                }
+                mismatches += !same;
+            }
+    }
+    st.counters["rays"] = 8192;
+    st.counters["hits"] = double(hits);
+    st.counters["mismatches"] = double(mismatches);
+}
+
+}  // namespace
+
+BENCHMARK_TEMPLATE(BM_Algorithm1, false)->Name("Algorithm1_camera")->Arg(5)->Arg(6)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Embree, false)->Name("Embree_camera")->Arg(5)->Arg(6)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Algorithm1, true)->Name("Algorithm1_interior")->Arg(5)->Arg(6)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Embree, true)->Name("Embree_interior")->Arg(5)->Arg(6)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_EmbreeCheckSameHits)->Arg(5)->Iterations(1);
+// 1e7 grains: run with --benchmark_filter='/7' (Embree needs ~3.6 GB and 10-20 s to build).
+BENCHMARK_TEMPLATE(BM_Algorithm1, false)->Name("Algorithm1_camera")->Arg(7)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Embree, false)->Name("Embree_camera")->Arg(7)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Algorithm1, true)->Name("Algorithm1_interior")->Arg(7)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Embree, true)->Name("Embree_interior")->Arg(7)->Unit(benchmark::kMicrosecond);
