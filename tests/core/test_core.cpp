@@ -257,3 +257,46 @@ TEST_CASE("Gauss-Legendre rules integrate polynomials of degree 2n-1 exactly", "
     CHECK_THROWS_AS(gauss_legendre(0), grainlight::invalid_argument);
     CHECK_THROWS_AS(gauss_legendre(4, 1.0, 1.0), grainlight::invalid_argument);
 }
+
+TEST_CASE("Gauss-Legendre nodes are correctly rounded: closed forms, A&S Table 25.4, one source", "[core][quadrature]") {
+    // n = 4 in closed form (e.g. Abramowitz & Stegun 25.4.29 / any quadrature text):
+    // x = sqrt(3/7 -+ 2/7 sqrt(6/5)), w = (18 +- sqrt(30)) / 36, evaluated in long double and rounded.
+    const long double s65 = std::sqrt(6.0L / 5.0L), s30 = std::sqrt(30.0L);
+    const double x_in = double(std::sqrt(3.0L / 7.0L - 2.0L / 7.0L * s65));
+    const double x_out = double(std::sqrt(3.0L / 7.0L + 2.0L / 7.0L * s65));
+    constexpr auto& g4 = gauss_legendre_nodes<4>;
+    CHECK(g4.x[2] == x_in);
+    CHECK(g4.x[3] == x_out);
+    CHECK(g4.x[0] == -x_out);
+    CHECK(g4.w[2] == double((18.0L + s30) / 36.0L));
+    CHECK(g4.w[3] == double((18.0L - s30) / 36.0L));
+    // n = 3: x = sqrt(3/5), w = 5/9, 8/9 (exact centre node).
+    constexpr auto& g3 = gauss_legendre_nodes<3>;
+    CHECK(g3.x[1] == 0.0);
+    CHECK(g3.x[2] == double(std::sqrt(0.6L)));
+    CHECK(g3.w[1] == double(8.0L / 9.0L));
+    // n = 8, Abramowitz & Stegun Table 25.4 (15 decimals).
+    constexpr auto& g8 = gauss_legendre_nodes<8>;
+    const double as_x[4] = {0.183434642495650, 0.525532409916329, 0.796666477413627, 0.960289856497536};
+    const double as_w[4] = {0.362683783378362, 0.313706645877887, 0.222381034453374, 0.101228536290376};
+    for (int i = 0; i < 4; ++i) {
+        CHECK(std::abs(g8.x[std::size_t(4 + i)] - as_x[i]) < 1e-15);
+        CHECK(std::abs(g8.w[std::size_t(4 + i)] - as_w[i]) < 1e-15);
+    }
+    // The compile-time table and the run-time rule are the same numbers.
+    static_assert(gauss_legendre_nodes<8>.x[7] > 0.96 && gauss_legendre_nodes<8>.x[7] < 0.9603);
+    for (int n : {1, 2, 3, 8, 16}) {
+        const auto r = gauss_legendre(n);
+        auto same = [&](const auto& t) {
+            for (std::size_t i = 0; i < r.x.size(); ++i) {
+                CHECK(r.x[i] == t.x[i]);
+                CHECK(r.w[i] == t.w[i]);
+            }
+        };
+        if (n == 1) same(gauss_legendre_nodes<1>);
+        if (n == 2) same(gauss_legendre_nodes<2>);
+        if (n == 3) same(gauss_legendre_nodes<3>);
+        if (n == 8) same(gauss_legendre_nodes<8>);
+        if (n == 16) same(gauss_legendre_nodes<16>);
+    }
+}

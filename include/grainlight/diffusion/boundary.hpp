@@ -20,15 +20,19 @@
 
 #include "grainlight/core/config.hpp"
 #include "grainlight/core/error.hpp"
+#include "grainlight/core/quadrature.hpp"
 #include "grainlight/optics/fresnel.hpp"
 
 namespace grainlight {
 
 namespace detail {
 
-/// 8-point Gauss-Legendre nodes (positive half) and weights on [-1, 1].
-inline constexpr double gl8_x[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267, 0.9602898564975363};
-inline constexpr double gl8_w[4] = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763};
+/// 8-point Gauss-Legendre nodes (positive half, ascending) and weights on [-1, 1], from the one
+/// Gauss-Legendre source (core/quadrature.hpp).
+inline constexpr std::array<double, 4> gl8_x = {gauss_legendre_nodes<8>.x[4], gauss_legendre_nodes<8>.x[5],
+                                                gauss_legendre_nodes<8>.x[6], gauss_legendre_nodes<8>.x[7]};
+inline constexpr std::array<double, 4> gl8_w = {gauss_legendre_nodes<8>.w[4], gauss_legendre_nodes<8>.w[5],
+                                                gauss_legendre_nodes<8>.w[6], gauss_legendre_nodes<8>.w[7]};
 
 /// int_a^b f(t) dt with one 8-point Gauss-Legendre panel.
 template <class F, class Fn>

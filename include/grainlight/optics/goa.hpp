@@ -48,6 +48,7 @@
 #include <boost/math/special_functions/bessel.hpp>
 
 #include "grainlight/core/error.hpp"
+#include "grainlight/core/quadrature.hpp"
 #include "grainlight/optics/lorenz_mie.hpp"
 
 namespace grainlight {
@@ -458,12 +459,8 @@ public:
         // Gauss-Legendre in u = sin^2 theta_i (d(sin^2)/2 = sin cos dtheta), split at the critical angle.
         const double umax = n >= 1 ? 1.0 : n * n;
         double sum = 0;
-        static constexpr double xg[8] = {-0.9602898564975363, -0.7966664774136267, -0.5255324099163290,
-                                         -0.1834346424956498, 0.1834346424956498,  0.5255324099163290,
-                                         0.7966664774136267,  0.9602898564975363};
-        static constexpr double wg[8] = {0.1012285362903763, 0.2223810344533745, 0.3137066458778873,
-                                         0.3626837833783620, 0.3626837833783620, 0.3137066458778873,
-                                         0.2223810344533745, 0.1012285362903763};
+        constexpr auto& xg = gauss_legendre_nodes<8>.x;
+        constexpr auto& wg = gauss_legendre_nodes<8>.w;
         const int panels = 64;
         for (int pi = 0; pi < panels; ++pi) {
             const double u0 = umax * pi / panels, u1 = umax * (pi + 1) / panels;
@@ -556,8 +553,8 @@ struct GoaMoments {
 };
 [[nodiscard]] inline GoaMoments goa_intensity_moments(const Goa& goa) {
     const double a = goa.alpha(), pi = detail::goa_pi;
-    static constexpr double xg[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526};
-    static constexpr double wg[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538};
+    constexpr auto& xg = gauss_legendre_nodes<4>.x;
+    constexpr auto& wg = gauss_legendre_nodes<4>.w;
     GoaMoments m;
     auto panel = [&](double t0, double t1) {
         for (int g = 0; g < 4; ++g) {

@@ -22,6 +22,7 @@
 
 #include "grainlight/core/distribution.hpp"
 #include "grainlight/core/error.hpp"
+#include "grainlight/core/quadrature.hpp"
 #include "grainlight/core/math.hpp"
 
 namespace grainlight {
@@ -223,15 +224,14 @@ public:
     [[nodiscard]] double sample(double u) const noexcept { return dist_.sample(u); }
     /// E[r^k], exact for the piecewise-linear density (Gauss-Legendre, 8 points per interval).
     [[nodiscard]] double moment(double k) const noexcept {
-        static constexpr double xg[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267, 0.9602898564975363};
-        static constexpr double wg[4] = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763};
+        constexpr auto& gl = gauss_legendre_nodes<8>;  // positive half: nodes 4..7
         double m = 0;
         for (std::size_t i = 0; i + 1 < r_.size(); ++i) {
             const double a = r_[i], b = r_[i + 1], c = 0.5 * (a + b), h = 0.5 * (b - a);
-            for (int g = 0; g < 4; ++g)
+            for (std::size_t g = 4; g < 8; ++g)
                 for (double sgn : {-1.0, 1.0}) {
-                    const double r = c + sgn * h * xg[g];
-                    m += h * wg[g] * std::pow(r, k) * dist_.pdf(r);
+                    const double r = c + sgn * h * gl.x[g];
+                    m += h * gl.w[g] * std::pow(r, k) * dist_.pdf(r);
                 }
         }
         return m;
