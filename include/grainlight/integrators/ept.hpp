@@ -122,7 +122,8 @@ struct GrainInteraction {
     /// Exit point from the bounding sphere (if not absorbed).
     Vec3d x_o{0.0}, w_o{0.0};  ///< exit point from the bounding sphere and exit direction (if not absorbed)
     double flight = 0;         ///< distance from the previous exit point (or walk start) to x_i
-    /// True if the photon was absorbed in (or terminated by) the grain; x_o, w_o are then unused.
+    /// True if the photon did not leave the grain (absorbed, or the event budget ran out); x_o is
+    /// then the grain-surface point where it last entered the grain and w_o is unused.
     bool absorbed = false;
     ChannelValues survival{1.0};  ///< per-channel throughput ratio over the interaction (the
                                   ///< grain's survival weight; 1 for lossless grains), one value

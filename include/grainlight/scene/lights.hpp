@@ -52,7 +52,7 @@ struct EmissionSample {
     Ray<F> ray;
     /// Power carried by the photon per channel [W].
     S weight{F(0)};
-    /// False if no photon could be emitted (zero-power light).
+    /// False if no photon was produced (directional and environment lights; a quad direction below its surface).
     bool valid = false;
     /// True if the sample is valid.
     [[nodiscard]] explicit operator bool() const noexcept { return valid; }

@@ -111,7 +111,7 @@ public:
     [[nodiscard]] const PeriodicTile& tile() const noexcept { return packing_.tile(); }
     /// The voxelized aggregate boundary.
     [[nodiscard]] const VoxelizedBoundary<Shape>& boundary() const noexcept { return packing_.boundary(); }
-    /// The exemplar grains, in the order of their mixing weights.
+    /// The exemplar grains (AggregateGrain::exemplar indexes them; same order as the mixing weights).
     [[nodiscard]] const std::vector<GrainExemplar>& exemplars() const noexcept { return exemplars_; }
     /// The Algorithm 1 traversal this aggregate runs on.
     [[nodiscard]] const TiledPacking<VoxelizedBoundary<Shape>>& packing() const noexcept { return packing_; }
