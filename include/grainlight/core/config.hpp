@@ -4,13 +4,17 @@
 
 #include <cassert>
 
+/// Library major version (API-breaking changes).
 #define GRAINLIGHT_VERSION_MAJOR 0
+/// Library minor version (additions).
 #define GRAINLIGHT_VERSION_MINOR 1
+/// Library patch version (fixes).
 #define GRAINLIGHT_VERSION_PATCH 0
 
 #if defined(__CUDACC__)
 #define GRAINLIGHT_HOST_DEVICE __host__ __device__
 #else
+/// Function annotation for code that may also run on a GPU: `__host__ __device__` under nvcc, empty otherwise.
 #define GRAINLIGHT_HOST_DEVICE
 #endif
 

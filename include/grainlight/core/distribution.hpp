@@ -134,6 +134,8 @@ template <std::floating_point F = double>
 class DiscreteDistribution {
 public:
     DiscreteDistribution() = default;
+    /// Build from non-negative weights (need not sum to 1); throws std::invalid_argument if `weights`
+    /// is empty, has a negative or non-finite entry, or sums to 0. O(n) setup, O(1) expected sampling.
     explicit DiscreteDistribution(std::span<const F> weights) {
         check_argument(!weights.empty(), "DiscreteDistribution", "weights.size()", weights.size(), ">= 1");
         cdf_.resize(weights.size() + 1);
@@ -151,8 +153,11 @@ public:
         cdf_.back() = F(1);
         guide_ = detail::CdfGuide(std::span<const F>(cdf_));
     }
+    /// Number of outcomes n (0 for a default-constructed distribution).
     [[nodiscard]] std::size_t size() const noexcept { return cdf_.empty() ? 0 : cdf_.size() - 1; }
+    /// Sum of the weights as given (before normalization).
     [[nodiscard]] F total() const noexcept { return total_; }
+    /// Probability of outcome i (normalized weight); i < size().
     [[nodiscard]] F pmf(std::size_t i) const noexcept { return cdf_[i + 1] - cdf_[i]; }
     /// Index for u in [0, 1); optionally the pmf and u re-scaled to [0, 1) within the chosen bin.
     [[nodiscard]] std::size_t sample(F u, F* pmf_out = nullptr, F* u_remapped = nullptr) const noexcept {
@@ -162,6 +167,7 @@ public:
         if (u_remapped) *u_remapped = p > 0 ? std::min((u - cdf_[i]) / p, F(1) - std::numeric_limits<F>::epsilon()) : F(0);
         return i;
     }
+    /// Normalized CDF, size() + 1 entries from 0 to exactly 1.
     [[nodiscard]] std::span<const F> cdf() const noexcept { return cdf_; }
 
 private:
@@ -180,11 +186,17 @@ public:
     /// Non-uniform grid: nodes.size() == values.size() + 1, strictly increasing.
     PiecewiseConstant1D(std::span<const F> nodes, std::span<const F> values) { build(nodes, values); }
 
+    /// Integral of the un-normalized values over [min(), max()].
     [[nodiscard]] F integral() const noexcept { return integral_; }
+    /// First node x_0 (lower end of the support).
     [[nodiscard]] F min() const noexcept { return x_.front(); }
+    /// Last node x_n (upper end of the support).
     [[nodiscard]] F max() const noexcept { return x_.back(); }
+    /// Number of intervals n.
     [[nodiscard]] std::size_t size() const noexcept { return f_.size(); }
+    /// The n + 1 nodes.
     [[nodiscard]] std::span<const F> nodes() const noexcept { return x_; }
+    /// The n un-normalized interval values.
     [[nodiscard]] std::span<const F> values() const noexcept { return f_; }
 
     /// Normalized density at x (0 outside [min, max]).
@@ -256,6 +268,8 @@ template <std::floating_point F = double>
 class PiecewiseLinear1D {
 public:
     PiecewiseLinear1D() = default;
+    /// Density through (nodes[i], values[i]): at least 2 strictly increasing finite nodes and as many
+    /// finite values >= 0 with a positive integral; throws std::invalid_argument otherwise.
     PiecewiseLinear1D(std::span<const F> nodes, std::span<const F> values) {
         const char* who = "PiecewiseLinear1D";
         check_argument(nodes.size() >= 2, who, "nodes.size()", nodes.size(), ">= 2");
@@ -282,10 +296,15 @@ public:
         guide_ = detail::CdfGuide(std::span<const F>(cdf_));
         xguide_ = detail::NodeGuide(std::span<const F>(x_));
     }
+    /// Integral of the un-normalized piecewise-linear function (trapezoid rule, exact).
     [[nodiscard]] F integral() const noexcept { return integral_; }
+    /// First node (lower end of the support).
     [[nodiscard]] F min() const noexcept { return x_.front(); }
+    /// Last node (upper end of the support).
     [[nodiscard]] F max() const noexcept { return x_.back(); }
+    /// The nodes x_i.
     [[nodiscard]] std::span<const F> nodes() const noexcept { return x_; }
+    /// The un-normalized values f_i at the nodes.
     [[nodiscard]] std::span<const F> values() const noexcept { return f_; }
 
     /// Un-normalized value (linear interpolation), 0 outside the support.
@@ -295,6 +314,7 @@ public:
         const F t = (x - x_[i]) / (x_[i + 1] - x_[i]);
         return f_[i] + t * (f_[i + 1] - f_[i]);
     }
+    /// Normalized density at x (0 outside [min(), max()]).
     [[nodiscard]] F pdf(F x) const noexcept { return eval(x) / integral_; }
     /// Exact inversion: inside an interval the CDF is quadratic in t.
     [[nodiscard]] F sample(F u, F* pdf_out = nullptr) const noexcept {
@@ -318,6 +338,7 @@ public:
         if (pdf_out) *pdf_out = (f0 + t * (f1 - f0)) / integral_;
         return x;
     }
+    /// CDF at x (0 below min(), 1 above max()): the u that sample() maps to x.
     [[nodiscard]] F invert(F x) const noexcept {
         if (x <= x_.front()) return 0;
         if (x >= x_.back()) return 1;

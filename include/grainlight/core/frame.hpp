@@ -9,8 +9,16 @@
 
 namespace grainlight {
 
+/// Orthonormal frame (s, t, n) built from a normal with Duff et al. 2017's branchless construction;
+/// converts directions between world space and the local space where n is +z.
 template <std::floating_point F>
 struct Frame {
+    /// @var s
+    /// First tangent (local +x).
+    /// @var t
+    /// Second tangent (local +y).
+    /// @var n
+    /// Normal (local +z).
     Vec3<F> s, t, n;
 
     /// Frame whose local +z is the unit vector `normal`.
@@ -21,9 +29,11 @@ struct Frame {
         s = Vec3<F>(F(1) + sign * normal.x * normal.x * a, sign * b, -sign * normal.x);
         t = Vec3<F>(b, sign + normal.y * normal.y * a, -normal.y);
     }
+    /// World direction v in local coordinates (components along s, t, n).
     [[nodiscard]] Vec3<F> to_local(const Vec3<F>& v) const noexcept {
         return Vec3<F>(glm::dot(v, s), glm::dot(v, t), glm::dot(v, n));
     }
+    /// Local direction v (x along s, y along t, z along n) back to world space.
     [[nodiscard]] Vec3<F> to_world(const Vec3<F>& v) const noexcept { return s * v.x + t * v.y + n * v.z; }
 };
 

@@ -11,12 +11,16 @@
 
 namespace grainlight {
 
+/// Pi in precision F.
 template <std::floating_point F>
 inline constexpr F pi_v = F(3.14159265358979323846264338327950288);
+/// 1/pi in precision F.
 template <std::floating_point F>
 inline constexpr F inv_pi_v = F(0.318309886183790671537767526745028724);
+/// 1/(2 pi) in precision F.
 template <std::floating_point F>
 inline constexpr F inv_two_pi_v = F(0.159154943091895335768883763372514362);
+/// 1/(4 pi) in precision F (the isotropic phase function's value).
 template <std::floating_point F>
 inline constexpr F inv_four_pi_v = F(0.0795774715459476678844418816862571810);
 
@@ -38,6 +42,7 @@ template <std::floating_point F>
     return std::acos(std::clamp(x, F(-1), F(1)));
 }
 
+/// Linear interpolation (1 - t) a + t b; t = 0 gives a, t = 1 gives b (not clamped).
 template <std::floating_point F>
 [[nodiscard]] GRAINLIGHT_HOST_DEVICE constexpr F lerp(F t, F a, F b) noexcept {
     return (F(1) - t) * a + t * b;

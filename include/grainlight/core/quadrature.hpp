@@ -20,6 +20,10 @@ namespace grainlight {
 
 /// An n-point rule on an interval: nodes `x` (ascending) and weights `w`.
 struct QuadratureRule {
+    /// @var x
+    /// Nodes on the rule's interval, ascending.
+    /// @var w
+    /// Weights, one per node.
     std::vector<double> x, w;
     /// sum_i w_i f(x_i).
     template <class Fn>

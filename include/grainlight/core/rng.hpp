@@ -32,13 +32,21 @@ template <class... Ts>
     return h;
 }
 
+/// PCG32 random number generator (O'Neill 2014, XSH-RR output, 64-bit state): small, fast and
+/// splittable by stream. One instance per path or per thread; not thread-safe when shared.
+/// Use from_key(seed, pixel, sample) for results independent of the thread count.
 class Pcg32 {
 public:
+    /// Default initial state (the PCG reference value).
     static constexpr std::uint64_t default_state = 0x853c49e6748fea9bull;
+    /// Default stream increment (the PCG reference value).
     static constexpr std::uint64_t default_stream = 0xda3e39cb94b95bdbull;
+    /// 64-bit LCG multiplier of the state update.
     static constexpr std::uint64_t multiplier = 0x5851f42d4c957f2dull;
 
+    /// Generator with the reference default state and stream.
     constexpr Pcg32() noexcept : state_(default_state), inc_(default_stream) {}
+    /// Generator seeded with `init_state` on stream `stream` (see seed()).
     constexpr Pcg32(std::uint64_t init_state, std::uint64_t stream) noexcept { seed(init_state, stream); }
 
     /// Counter-based construction: the generator for (seed, a, b), e.g. (seed, pixel, sample) or
@@ -48,6 +56,7 @@ public:
         return Pcg32(mix64(h ^ 0x6a09e667f3bcc909ull), h);
     }
 
+    /// Re-seed: `init_state` sets the starting point, `stream` selects one of 2^63 independent sequences.
     constexpr void seed(std::uint64_t init_state, std::uint64_t stream) noexcept {
         state_ = 0u;
         inc_ = (stream << 1u) | 1u;
@@ -72,6 +81,7 @@ public:
             if (r >= threshold) return r % bound;
         }
     }
+    /// Uniform 64-bit integer (two consecutive 32-bit outputs, high word first).
     GRAINLIGHT_HOST_DEVICE constexpr std::uint64_t next_u64() noexcept {
         return (std::uint64_t(next_u32()) << 32) | next_u32();
     }
@@ -91,6 +101,7 @@ public:
         else
             return F(next_double());
     }
+    /// Two consecutive uniform [0, 1) values of type F (x drawn first), for 2D warps.
     template <std::floating_point F>
     GRAINLIGHT_HOST_DEVICE Vec2<F> uniform2() noexcept {
         const F a = uniform<F>();

@@ -114,8 +114,11 @@ private:
 /// grainlight::format_error (naming `context`), so parsers of hostile data never read out of bounds.
 class ByteReader {
 public:
+    /// Reader over `size` bytes at `data` (not owned: the bytes must outlive the reader); `context`
+    /// names the data in error messages.
     ByteReader(const unsigned char* data, std::size_t size, std::string context)
         : data_(data), size_(size), context_(std::move(context)) {}
+    /// Reader over the bytes of `v` (not owned: `v` must outlive the reader and stay unchanged).
     explicit ByteReader(const std::vector<unsigned char>& v, std::string context = "payload")
         : ByteReader(v.data(), v.size(), std::move(context)) {}
 

@@ -9,17 +9,26 @@
 
 namespace grainlight {
 
+/// 2-vector of F (glm, so glm::dot, glm::length etc. apply).
 template <std::floating_point F>
 using Vec2 = glm::vec<2, F, glm::defaultp>;
+/// 3-vector of F: points, directions and normals.
 template <std::floating_point F>
 using Vec3 = glm::vec<3, F, glm::defaultp>;
+/// 4-vector of F.
 template <std::floating_point F>
 using Vec4 = glm::vec<4, F, glm::defaultp>;
+/// Single-precision 2-vector (sample pairs in [0,1)^2).
 using Vec2f = Vec2<float>;
+/// Single-precision 3-vector.
 using Vec3f = Vec3<float>;
+/// Double-precision 2-vector.
 using Vec2d = Vec2<double>;
+/// Double-precision 3-vector.
 using Vec3d = Vec3<double>;
+/// Integer 3-vector (grid cell indices).
 using Vec3i = glm::vec<3, int, glm::defaultp>;
+/// 64-bit integer 3-vector (cell indices of large or periodic grids).
 using Vec3i64 = glm::vec<3, long long, glm::defaultp>;
 
 /// Component of largest absolute value.

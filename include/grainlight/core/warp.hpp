@@ -19,6 +19,7 @@ template <std::floating_point F>
     const F phi = F(2) * pi_v<F> * u.y;
     return Vec3<F>(r * std::cos(phi), r * std::sin(phi), z);
 }
+/// Solid-angle pdf of sample_uniform_sphere: 1/(4 pi).
 template <std::floating_point F>
 [[nodiscard]] constexpr F uniform_sphere_pdf() noexcept {
     return inv_four_pi_v<F>;
@@ -32,6 +33,7 @@ template <std::floating_point F>
     const F phi = F(2) * pi_v<F> * u.y;
     return Vec3<F>(r * std::cos(phi), r * std::sin(phi), z);
 }
+/// Solid-angle pdf of sample_uniform_hemisphere: 1/(2 pi).
 template <std::floating_point F>
 [[nodiscard]] constexpr F uniform_hemisphere_pdf() noexcept {
     return inv_two_pi_v<F>;
@@ -85,6 +87,7 @@ template <std::floating_point F>
     const F theta = F(2) * pi_v<F> * u.y;
     return Vec2<F>(r * std::cos(theta), r * std::sin(theta));
 }
+/// Area pdf of the uniform disk samplers: 1/pi.
 template <std::floating_point F>
 [[nodiscard]] constexpr F uniform_disk_pdf() noexcept {
     return inv_pi_v<F>;
@@ -97,6 +100,7 @@ template <std::floating_point F>
     const F z = safe_sqrt(F(1) - d.x * d.x - d.y * d.y);
     return Vec3<F>(d.x, d.y, z);
 }
+/// Solid-angle pdf of sample_cosine_hemisphere: max(cos_theta, 0)/pi.
 template <std::floating_point F>
 [[nodiscard]] inline F cosine_hemisphere_pdf(F cos_theta) noexcept {
     return std::max(cos_theta, F(0)) * inv_pi_v<F>;
@@ -110,6 +114,7 @@ template <std::floating_point F>
     const F phi = F(2) * pi_v<F> * u.y;
     return Vec3<F>(std::cos(phi) * sin_theta, std::sin(phi) * sin_theta, cos_theta);
 }
+/// Solid-angle pdf of sample_uniform_cone: 1/(2 pi (1 - cos_theta_max)).
 template <std::floating_point F>
 [[nodiscard]] inline F uniform_cone_pdf(F cos_theta_max) noexcept {
     return F(1) / (F(2) * pi_v<F> * (F(1) - cos_theta_max));
@@ -120,6 +125,7 @@ template <std::floating_point F>
 [[nodiscard]] inline F sample_exponential(F u, F a) noexcept {
     return -std::log1p(-u) / a;
 }
+/// Pdf of sample_exponential at distance t >= 0 with rate a > 0: a exp(-a t).
 template <std::floating_point F>
 [[nodiscard]] inline F exponential_pdf(F t, F a) noexcept {
     return a * std::exp(-a * t);

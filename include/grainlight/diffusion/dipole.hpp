@@ -74,8 +74,11 @@ public:
         return F(0.5) * alpha_prime_ * (F(1) + std::exp(F(-4) / F(3) * A_ * s)) * std::exp(-s);
     }
 
+    /// Reduced scattering coefficient sigma_s' (1/length) given at construction.
     [[nodiscard]] F sigma_s_prime() const noexcept { return sigma_s_prime_; }
+    /// Absorption coefficient sigma_a (1/length).
     [[nodiscard]] F sigma_a() const noexcept { return sigma_a_; }
+    /// Relative index eta = n_medium / n_outside.
     [[nodiscard]] F eta() const noexcept { return eta_; }
     /// Reduced extinction sigma_t' = sigma_s' + sigma_a (1/length).
     [[nodiscard]] F sigma_t_prime() const noexcept { return sigma_t_prime_; }

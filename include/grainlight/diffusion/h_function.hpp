@@ -17,9 +17,13 @@
 
 namespace grainlight {
 
+/// Chandrasekhar's H-function H(mu) for isotropic scattering with albedo a, solved once at
+/// construction (see the file comment); immutable, thread-safe evaluation.
 class IsotropicHFunction {
 public:
-    /// \param albedo single-scattering albedo in [0, 1); \param nodes quadrature nodes (>= 8)
+    /// Solve for H by fixed-point iteration; throws grainlight::invalid_argument on bad input.
+    /// \param albedo single-scattering albedo in [0, 1)
+    /// \param nodes  Gauss-Legendre quadrature nodes on [0, 1] (>= 8)
     explicit IsotropicHFunction(double albedo, int nodes = 200) : a_(albedo) {
         check_argument(albedo >= 0.0 && albedo < 1.0, "IsotropicHFunction", "albedo", albedo, "[0, 1)");
         check_argument(nodes >= 8, "IsotropicHFunction", "nodes", nodes, ">= 8");
@@ -51,6 +55,7 @@ public:
         for (std::size_t i = 0; i < h_.size(); ++i) m += q_.w[i] * h_[i];
         return m;
     }
+    /// Single-scattering albedo a.
     [[nodiscard]] double albedo() const noexcept { return a_; }
 
 private:

@@ -111,8 +111,11 @@ public:
         return std::min(F(1) / sigma_t_prime_, inv_tr);
     }
 
+    /// Reduced scattering coefficient sigma_s' (1/length) given at construction.
     [[nodiscard]] F sigma_s_prime() const noexcept { return sigma_s_prime_; }
+    /// Absorption coefficient sigma_a (1/length).
     [[nodiscard]] F sigma_a() const noexcept { return sigma_a_; }
+    /// Relative index eta = n_medium / n_outside.
     [[nodiscard]] F eta() const noexcept { return eta_; }
     /// sigma_t' = sigma_s' + sigma_a (1/length).
     [[nodiscard]] F sigma_t_prime() const noexcept { return sigma_t_prime_; }

@@ -150,11 +150,15 @@ public:
         return acc;
     }
 
+    /// Reduced scattering coefficient sigma_s' (1/length) given at construction.
     [[nodiscard]] F sigma_s_prime() const noexcept { return sigma_s_prime_; }
+    /// Absorption coefficient sigma_a (1/length).
     [[nodiscard]] F sigma_a() const noexcept { return sigma_a_; }
+    /// Relative index eta = n_medium / n_outside.
     [[nodiscard]] F eta() const noexcept { return eta_; }
     /// Slab thickness d (length).
     [[nodiscard]] F thickness() const noexcept { return d_; }
+    /// Source model of every pole pair (classical dipole or improved).
     [[nodiscard]] DiffusionModel model() const noexcept { return model_; }
     /// sigma_t' = sigma_s' + sigma_a (1/length).
     [[nodiscard]] F sigma_t_prime() const noexcept { return sigma_t_prime_; }

@@ -49,9 +49,19 @@ template <std::floating_point F>
 struct WatertightRay {
     /// Ray origin.
     Vec3<F> o;
+    /// @var kx
     /// Axis permutation: kz is the dominant axis of the direction.
+    /// @var ky
+    /// Second axis of the permutation (swapped with kx when d[kz] < 0, to keep the winding).
+    /// @var kz
+    /// Dominant axis of the direction (largest |d|).
     int kx = 0, ky = 1, kz = 2;
-    /// Shear constants.
+    /// @var sx
+    /// Shear constants: sx = d[kx] / d[kz].
+    /// @var sy
+    /// Shear d[ky] / d[kz].
+    /// @var sz
+    /// Scale 1 / d[kz].
     F sx = F(0), sy = F(0), sz = F(1);
 
     /// Precompute for a ray o + t d (d non-zero).
@@ -127,7 +137,9 @@ class Bvh {
 public:
     /// Maximum triangles per leaf and SAH bin count.
     static constexpr int max_leaf_size = 4;
+    /// Number of SAH bins per axis in the build.
     static constexpr int bin_count = 16;
+    /// Maximum tree depth; deeper splits become leaves.
     static constexpr int max_depth = 64;
 
     /// An empty BVH (every query misses).

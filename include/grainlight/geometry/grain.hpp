@@ -22,6 +22,9 @@
 
 namespace grainlight {
 
+/// One grain in its unit frame (bounding sphere of radius <= 1 at the origin): an analytic sphere
+/// or a triangle mesh with its BVH, plus the GrainMaterial. Immutable after construction, cheap to
+/// copy (the BVH is shared) and safe to query from many threads.
 class Grain {
 public:
     /// Analytic sphere of radius `radius` in (0, 1].
@@ -63,6 +66,7 @@ public:
     [[nodiscard]] bool is_analytic_sphere() const noexcept { return !bvh_; }
     /// Radius of the grain's own (origin-centred) bounding sphere (the sphere's radius).
     [[nodiscard]] double radius() const noexcept { return radius_; }
+    /// Number of mesh triangles (0 for the analytic sphere).
     [[nodiscard]] std::size_t triangle_count() const noexcept { return triangles_; }
     /// Bytes of the grain's geometry (BVH nodes + triangles; 0 for the analytic sphere).
     [[nodiscard]] std::size_t memory_bytes() const noexcept {
@@ -96,6 +100,7 @@ public:
     /// their size, well above the float round-off of the watertight test).
     [[nodiscard]] double surface_epsilon() const noexcept { return bvh_ ? 2e-5 * radius_ : 1e-10; }
 
+    /// Human-readable description (sphere or mesh with triangle count, radius, material).
     [[nodiscard]] std::string to_string() const {
         return std::string("Grain[") + (bvh_ ? "mesh, " + std::to_string(triangles_) + " triangles" : "sphere") +
                ", radius " + std::to_string(radius_) + ", " + std::string(grainlight::to_string(material_.kind)) + "]";

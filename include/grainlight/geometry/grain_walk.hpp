@@ -53,6 +53,7 @@ enum class GrainEstimator : std::uint8_t { weighted, analog };
 
 /// Options of a grain walk.
 struct GrainWalkOptions {
+    /// Weighted (one path, per-channel throughput) or analog (one channel, Russian-roulette events).
     GrainEstimator estimator = GrainEstimator::weighted;
     std::size_t channel = 0;                        ///< analog: the material channel traced
     TransportMode mode = TransportMode::radiance;   ///< radiance scaling at refractions (weighted)
@@ -61,6 +62,11 @@ struct GrainWalkOptions {
 
 /// Outcome of a grain walk (a grain "sojourn").
 struct GrainSojourn {
+    /// @var kind
+    /// How the walk ended (absorbed until the walk sets it).
+    ///
+    /// @enum Kind
+    /// How a grain walk ended.
     enum Kind : std::uint8_t {
         exited,     ///< left the grain's surface outward at p along d
         absorbed,   ///< absorbed (analog), or a diffuse grain hit from inside
@@ -72,6 +78,7 @@ struct GrainSojourn {
     bool specular = true;  ///< last event was a delta event (false: Lambertian)
     double pdf = 0;        ///< solid-angle pdf of the last direction (Lambertian), else 0
     int events = 0;        ///< surface + interior scattering events
+    /// True if the path left the grain (p, d, n are then valid).
     [[nodiscard]] bool is_exited() const noexcept { return kind == exited; }
 };
 

@@ -338,16 +338,29 @@ namespace grainlight {
 struct GrainPreset {
     std::string name;          ///< e.g. "glass-bead"
     std::string paper_column;  ///< Table 1 column ("" if the grain is not in Table 1)
+    /// Procedural shape family.
     GrainShape shape = GrainShape::sphere;
+    /// Bounding radius in units of the packing's bounding sphere, in (0, 1].
     double radius = 1.0;
+    /// Seed of the procedural shape (same seed, same mesh).
     std::uint64_t seed = 1;
+    /// Interior and surface optics of the grain.
     GrainMaterial material{};
 };
 
 /// One column of Meng15 Table 1 ("extracted statistics, averaged over wavelength and rounded to
 /// two digits"), lengths in units of the bounding-sphere radius.
 struct Meng15Table1Column {
+    /// Column heading, e.g. "Glass bead".
     const char* name;
+    /// @var lambda_delta
+    /// Mean pass-through offset of the rays that miss the grain.
+    /// @var lambda_s
+    /// Length of the mean teleport vector of the rays that hit and leave.
+    /// @var alpha_s
+    /// Effective grain albedo: fraction of hitting rays that leave.
+    /// @var beta
+    /// Hit probability of a ray crossing the bounding sphere.
     double lambda_delta, lambda_s, alpha_s, beta;
 };
 

@@ -80,14 +80,19 @@ namespace detail {
 
 /// Solid sphere |p - center| < radius (radius > 0).
 struct SphereBoundary {
+    /// Sphere centre (world units, finite).
     Vec3d center{0.0};
+    /// Sphere radius (> 0).
     double radius = 1.0;
 
+    /// Sphere at `c` of radius `r` > 0; throws grainlight::invalid_argument otherwise.
     SphereBoundary(const Vec3d& c, double r) : center(c), radius(r) {
         check_argument(std::isfinite(r) && r > 0, "SphereBoundary", "radius", r, "(0, inf)");
         check_argument(std::isfinite(c.x + c.y + c.z), "SphereBoundary", "center", c.x + c.y + c.z, "finite");
     }
+    /// True if p is strictly inside.
     [[nodiscard]] bool inside(const Vec3d& p) const noexcept { return glm::dot(p - center, p - center) < radius * radius; }
+    /// Axis-aligned bounds of the sphere.
     [[nodiscard]] Aabb<double> bounds() const noexcept { return {center - Vec3d(radius), center + Vec3d(radius)}; }
     /// Clip the ray o + t d (unit d) to the shape dilated by `margin`: narrows [t0, t1] to the
     /// part within distance `margin` of the shape; false if nothing remains.
@@ -116,21 +121,29 @@ struct SphereBoundary {
 
 /// Solid axis-aligned box lo < p < hi.
 struct BoxBoundary {
+    /// @var lo
+    /// Lower corner.
+    /// @var hi
+    /// Upper corner (hi > lo on every axis).
     Vec3d lo{-1.0}, hi{1.0};
 
+    /// Box between `lo_` and `hi_` (hi_ > lo_ on every axis, finite); throws grainlight::invalid_argument otherwise.
     BoxBoundary(const Vec3d& lo_, const Vec3d& hi_) : lo(lo_), hi(hi_) {
         for (int a = 0; a < 3; ++a)
             check_argument(std::isfinite(hi[a] - lo[a]) && hi[a] > lo[a], "BoxBoundary", "hi - lo", hi[a] - lo[a],
                            "(0, inf) on every axis");
     }
+    /// True if p is strictly inside.
     [[nodiscard]] bool inside(const Vec3d& p) const noexcept {
         return p.x > lo.x && p.x < hi.x && p.y > lo.y && p.y < hi.y && p.z > lo.z && p.z < hi.z;
     }
+    /// The box itself.
     [[nodiscard]] Aabb<double> bounds() const noexcept { return {lo, hi}; }
     /// Clip to the box grown by `margin` (a superset of the dilated box).
     [[nodiscard]] bool clip(const Vec3d& o, const Vec3d& d, double margin, double& t0, double& t1) const noexcept {
         return detail::clip_ray_to_box(o, d, lo - Vec3d(margin), hi + Vec3d(margin), t0, t1);
     }
+    /// Classify the voxel [blo, bhi] exactly: outside, inside (fully contained) or partial.
     [[nodiscard]] VoxelClass classify_box(const Vec3d& blo, const Vec3d& bhi) const noexcept {
         bool contained = true;
         for (int a = 0; a < 3; ++a) {
@@ -144,9 +157,13 @@ struct BoxBoundary {
 /// Union of two shapes (each with classify_box): inside if in either.
 template <class A, class B>
 struct UnionBoundary {
+    /// First shape.
     A a;
+    /// Second shape.
     B b;
+    /// True if p is inside a or b.
     [[nodiscard]] bool inside(const Vec3d& p) const noexcept { return a.inside(p) || b.inside(p); }
+    /// Union of the two shapes' bounds.
     [[nodiscard]] Aabb<double> bounds() const noexcept {
         Aabb<double> r = a.bounds();
         r.expand(b.bounds());
@@ -161,6 +178,7 @@ struct UnionBoundary {
         t1 = std::min(t1, std::max(ha ? a1 : b1, hb ? b1 : a1));
         return t0 < t1;
     }
+    /// Inside if either part classifies the box inside, outside if both do outside, else partial (conservative).
     [[nodiscard]] VoxelClass classify_box(const Vec3d& lo, const Vec3d& hi) const noexcept {
         const VoxelClass ca = a.classify_box(lo, hi), cb = b.classify_box(lo, hi);
         if (ca == VoxelClass::inside || cb == VoxelClass::inside) return VoxelClass::inside;
@@ -207,6 +225,7 @@ namespace detail {
 /// Throws grainlight::invalid_argument for an invalid, non-watertight or inside-out mesh.
 class MeshBoundary {
 public:
+    /// Copy `mesh` (validated: watertight, outward-facing, positive signed volume) into double precision and build its BVH.
     template <std::floating_point F>
     explicit MeshBoundary(const TriangleMesh<F>& mesh) {
         mesh.validate("MeshBoundary");
@@ -225,11 +244,13 @@ public:
         bvh_ = std::make_shared<const Bvh<double>>(m);
     }
 
+    /// Bounds of the mesh.
     [[nodiscard]] Aabb<double> bounds() const noexcept { return bounds_; }
     /// Clip to the mesh bounds grown by `margin` (conservative).
     [[nodiscard]] bool clip(const Vec3d& o, const Vec3d& d, double margin, double& t0, double& t1) const noexcept {
         return detail::clip_ray_to_box(o, d, bounds_.lo - Vec3d(margin), bounds_.hi + Vec3d(margin), t0, t1);
     }
+    /// Number of triangles.
     [[nodiscard]] std::size_t triangle_count() const noexcept { return tris_.size(); }
     /// Bytes held (triangles copy + BVH estimate).
     [[nodiscard]] std::size_t memory_bytes() const noexcept {
@@ -387,14 +408,21 @@ public:
         refine(origin);
     }
 
+    /// The voxelized shape (in the anchor tile's frame).
     [[nodiscard]] const Shape& shape() const noexcept { return shape_; }
+    /// Side of a tile = of a voxel (world units).
     [[nodiscard]] double tile_side() const noexcept { return side_; }
+    /// Tile the shape's frame is anchored at.
     [[nodiscard]] const Vec3i64& anchor() const noexcept { return anchor_; }
     /// Grid dimensions (voxels per axis) and its first voxel, relative to the anchor tile.
     [[nodiscard]] const std::array<std::int64_t, 3>& dims() const noexcept { return dims_; }
+    /// First voxel of the grid per axis, relative to the anchor tile.
     [[nodiscard]] const std::array<std::int64_t, 3>& grid_lo() const noexcept { return lo_; }
+    /// Total number of voxels of the grid.
     [[nodiscard]] std::size_t voxel_count() const noexcept { return std::size_t(dims_[0] * dims_[1] * dims_[2]); }
+    /// Number of voxels fully inside the shape.
     [[nodiscard]] std::size_t inside_count() const noexcept { return n_inside_; }
+    /// Number of partial voxels (crossed by the surface; point tests needed there).
     [[nodiscard]] std::size_t partial_count() const noexcept { return n_partial_; }
     /// Bytes of the voxel classes (2 bits per voxel, rounded up to 64-bit words); the shape
     /// (e.g. a mesh BVH for the partial-voxel test) and the refinement are separate.
@@ -441,6 +469,7 @@ public:
     }
     /// Absolute tile range [lo, hi] (inclusive) of the grid.
     [[nodiscard]] Vec3i64 tile_lo() const noexcept { return anchor_ + Vec3i64(lo_[0], lo_[1], lo_[2]); }
+    /// Last absolute tile of the grid (inclusive).
     [[nodiscard]] Vec3i64 tile_hi() const noexcept {
         return anchor_ + Vec3i64(lo_[0] + dims_[0] - 1, lo_[1] + dims_[1] - 1, lo_[2] + dims_[2] - 1);
     }
@@ -520,7 +549,9 @@ private:
 /// The whole space (an infinite aggregate: Meng15's free-flight and detector-sphere experiments,
 /// Secs. 4.2.2-4.2.3). Its voxelization stores nothing: every voxel is fully inside.
 struct EverywhereBoundary {
+    /// Every point is inside.
     [[nodiscard]] bool inside(const Vec3d&) const noexcept { return true; }
+    /// Bounds of +-1e300 on every axis.
     [[nodiscard]] Aabb<double> bounds() const noexcept {
         constexpr double big = 1e300;
         return {Vec3d(-big), Vec3d(big)};
@@ -532,22 +563,34 @@ struct EverywhereBoundary {
 template <>
 class VoxelizedBoundary<EverywhereBoundary> {
 public:
+    /// Voxelization of the whole space with tiles of side `tile_side` > 0 (throws otherwise) around tile `anchor`.
     explicit VoxelizedBoundary(EverywhereBoundary shape = {}, double tile_side = 1.0, const Vec3i64& anchor = Vec3i64(0, 0, 0))
         : shape_(shape), side_(tile_side), anchor_(anchor) {
         check_argument(std::isfinite(tile_side) && tile_side > 0, "VoxelizedBoundary", "tile_side", tile_side, "(0, inf)");
     }
+    /// Half-width of the nominal tile range around the anchor: 2^40 tiles.
     static constexpr std::int64_t half_range = std::int64_t(1) << 40;
+    /// The (empty) shape.
     [[nodiscard]] const EverywhereBoundary& shape() const noexcept { return shape_; }
+    /// Side of a tile (world units).
     [[nodiscard]] double tile_side() const noexcept { return side_; }
+    /// Anchor tile.
     [[nodiscard]] const Vec3i64& anchor() const noexcept { return anchor_; }
+    /// 0: nothing is stored.
     [[nodiscard]] std::size_t voxel_count() const noexcept { return 0; }
+    /// 0: nothing is stored.
     [[nodiscard]] std::size_t memory_bytes() const noexcept { return 0; }
+    /// Every voxel is inside.
     [[nodiscard]] VoxelClass classify(const Vec3i64&) const noexcept { return VoxelClass::inside; }
+    /// Every point is inside.
     [[nodiscard]] bool point_inside(const Vec3i64&, const Vec3d&) const noexcept { return true; }
+    /// Shape-frame position of a point given as (absolute tile, local offset).
     [[nodiscard]] Vec3d to_shape_frame(const Vec3i64& tile, const Vec3d& local) const noexcept {
         return Vec3d(double(tile.x - anchor_.x), double(tile.y - anchor_.y), double(tile.z - anchor_.z)) * side_ + local;
     }
+    /// First tile of the nominal range, anchor - 2^40.
     [[nodiscard]] Vec3i64 tile_lo() const noexcept { return anchor_ - Vec3i64(half_range); }
+    /// Last tile of the nominal range, anchor + 2^40.
     [[nodiscard]] Vec3i64 tile_hi() const noexcept { return anchor_ + Vec3i64(half_range); }
 
 private:

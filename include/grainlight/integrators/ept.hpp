@@ -70,6 +70,7 @@ struct EptOptions {
     int rr_depth = 16;         ///< Russian roulette after this many events
     int low_order_max = 10;    ///< k: paths with <= k grain interactions go to the low-order image
     bool nee = true;           ///< next-event estimation at diffuse surfaces (with MIS)
+    /// Radiance (camera paths: 1/eta^2 scaling at refractions) or importance (light paths: none).
     TransportMode mode = TransportMode::radiance;
 };
 
@@ -112,10 +113,17 @@ template <BoundaryShape Shape, class S, class OnDiffuse, class OnSegment>
 
 /// One complete grain interaction of a photon walk (Meng15 Sec. 4.1's TSDF quantities).
 struct GrainInteraction {
+    /// The grain instance the photon interacted with.
     AggregateGrain grain{};
+    /// @var x_i
+    /// Entry point into the bounding sphere.
     Vec3d x_i{0.0}, w_i{0.0};  ///< entry point into the bounding sphere and incident direction
+    /// @var x_o
+    /// Exit point from the bounding sphere (if not absorbed).
     Vec3d x_o{0.0}, w_o{0.0};  ///< exit point from the bounding sphere and exit direction (if not absorbed)
     double flight = 0;         ///< distance from the previous exit point (or walk start) to x_i
+    /// True if the photon did not leave the grain (absorbed, or the event budget ran out); x_o is
+    /// then the grain-surface point where it last entered the grain and w_o is unused.
     bool absorbed = false;
     ChannelValues survival{1.0};  ///< per-channel throughput ratio over the interaction (the
                                   ///< grain's survival weight; 1 for lossless grains), one value
@@ -220,11 +228,13 @@ PhotonWalkEnd ept_photon_walk(const GranularAggregate<Shape>& agg, Vec3d p, Vec3
 
 /// Result of the free-flight measurement (Meng15 Fig. 6 bottom).
 struct FreeFlightStats {
+    /// Number of free-flight samples z recorded.
     std::uint64_t samples = 0;
     double mean = 0;        ///< mean of z = flight + (x_o - x_i) . w_i (0 if absorbed)
     double stderr_mean = 0; ///< standard error of the mean
     double mean_flight = 0; ///< mean of the flight part alone (exit -> next entry), for lambda_beta
     std::vector<double> hist;  ///< pdf of z on [0, z_max) in `bins` bins
+    /// Upper end of the histogram range of z.
     double z_max = 0;
 };
 
@@ -325,7 +335,9 @@ template <LitScene Scene, class Aggregate, class S>
 /// Radiance of a camera path split into low-order (<= k grain interactions) and high-order parts.
 template <class S>
 struct EptRadiance {
+    /// Low-order part (paths with <= k grain interactions).
     S low{0.0f};
+    /// High-order part (paths with more interactions, or past a switch to high order).
     S high{0.0f};
     std::uint64_t grain_rays = 0;  ///< aggregate traversals (Algorithm 1 calls) made
 };
@@ -335,6 +347,8 @@ struct EptRadiance {
 /// time with `ept_step` and stay EPT by construction.
 template <class S>
 struct EptPathState {
+    /// @var p
+    /// Current path origin.
     Vec3d p{0.0}, d{0.0, 0.0, 1.0};  ///< current origin and unit direction
     S beta{1.0f};                    ///< path throughput
     bool specular = true;            ///< last bounce was a delta event (no MIS on emission)
@@ -342,7 +356,9 @@ struct EptPathState {
     Vec3d last_p{0.0};               ///< where that bounce happened
     int order = 0;                   ///< grain interactions so far
     int events = 0;                  ///< surface + interior events so far
+    /// True if last_grain is set (the path last interacted with a grain).
     bool have_last_grain = false;
+    /// The grain of the last interaction (not re-hit by the next traversal).
     AggregateGrain last_grain{};
     bool high = false;               ///< contributions go to the high-order part from now on
     int low_order_max = std::numeric_limits<int>::max();  ///< ... and so do those of paths past this order
@@ -378,6 +394,7 @@ enum class EptSwitch : std::uint8_t {
 
 /// The switch policy of plain EPT: never leave.
 struct NeverSwitch {
+    /// Always EptSwitch::stay.
     template <class S>
     [[nodiscard]] constexpr EptSwitch operator()(const EptPathState<S>&, const Vec3d&, bool) const noexcept {
         return EptSwitch::stay;
@@ -541,8 +558,13 @@ inline void check_material_channels(const GranularAggregate<Shape>& agg, std::si
 
 /// The two images of an EPT render and its ray count.
 struct EptImages {
+    /// @var low
+    /// Low-order image (<= k grain interactions).
+    /// @var high
+    /// High-order image.
     Film low, high;
     std::uint64_t grain_rays = 0;  ///< Algorithm 1 traversals (camera + shadow rays)
+    /// Sum of the low- and high-order images (the full EPT render).
     [[nodiscard]] Image combined() const {
         Image a = low.image();
         const Image b = high.image();

@@ -70,17 +70,24 @@ template <WalkScene Scene, class MakeScorer>
 /// scene, and the photon-walk estimator.
 class SlabProblem {
 public:
+    /// Floating-point type (double).
     using F = double;
+    /// One-channel spectrum of doubles.
     using S = Spectrum<1, double>;
+    /// Henyey-Greenstein phase function of the slab.
     using Phase = HenyeyGreenstein<double, S>;
+    /// The slab's homogeneous medium type.
     using MediumType = ContinuousMedium<Phase, S>;
+    /// The slab scene type.
     using SceneType = SlabScene<MediumType>;
 
     /// Throws grainlight::invalid_argument naming the parameter (albedo, optical_depth, g, ior,
     /// mu0) when it is out of range.
     explicit SlabProblem(const SlabParams& p) : params_(validate(p)), scene_(make_scene(params_)) {}
 
+    /// The validated parameters.
     [[nodiscard]] const SlabParams& params() const noexcept { return params_; }
+    /// The slab scene (medium, thickness, index) built from params().
     [[nodiscard]] const SceneType& scene() const noexcept { return scene_; }
 
     /// Trace paths [first, first + count) with the counter-based generators

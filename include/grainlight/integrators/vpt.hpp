@@ -80,11 +80,17 @@ template <WalkScene Scene>
 /// The VPT's per-event callbacks: accumulate radiance L along one camera path.
 template <LitScene Scene>
 struct VptCallbacks {
+    /// Floating-point type of the scene.
     using F = typename Scene::Float;
+    /// Spectrum type of the scene.
     using S = typename Scene::Spectrum;
+    /// The scene traced (lights, surfaces, media).
     const Scene& scene;
+    /// The path's random number generator (the caller's, e.g. Pcg32::from_key(seed, pixel, sample)).
     Rng& rng;
+    /// VPT options (NEE on/off, depths).
     VptOptions opt;
+    /// Radiance accumulated along the path so far.
     S L{F(0)};
     bool last_nee = false;  ///< whether NEE was done at the last non-specular vertex (MIS partner)
 
@@ -117,6 +123,8 @@ struct VptCallbacks {
         L += st.throughput * f * tr * ls.L * (w / ls.pdf);
     }
 
+    /// Walk callback at a surface hit: adds MIS-weighted emission and, at diffuse surfaces with NEE on,
+    /// a light sample; returns true (the walk continues).
     bool on_surface(PathState<F, S>& st, const SurfaceHit<F, S>& hit) noexcept {
         if (hit.light >= 0) add_emission(st, scene.emitted(hit, st.ray.d), hit);
         if (hit.type == SurfaceType::diffuse) last_nee = opt.nee;
@@ -134,6 +142,8 @@ struct VptCallbacks {
         return true;
     }
 
+    /// Walk callback at a scattering event of medium m: next-event estimation with m's phase function
+    /// (when NEE is on and the medium lets the kernel pick the direction); returns true.
     template <class M>
     bool on_scatter(PathState<F, S>& st, const Interaction<F, S>& it, const M& m) noexcept {
         last_nee = false;  // media that choose their own direction (or custom NEE) get no MIS partner
@@ -152,6 +162,7 @@ struct VptCallbacks {
         return true;
     }
 
+    /// Walk callback when the path leaves the scene: adds the environment radiance, MIS-weighted.
     void on_escape(const PathState<F, S>& st) noexcept {
         const S Le = scene.environment(st.ray.d);
         if (Le.is_black()) return;

@@ -74,6 +74,7 @@ struct WalkOptions {
     /// the throughput), divide by q. Paths whose throughput stays <= 1 and grey (analog photon
     /// walks) are never killed by it, so it adds no variance there.
     int rr_depth = 5;
+    /// Radiance (camera paths: 1/eta^2 scaling at refractions) or importance (light and photon paths: none).
     TransportMode mode = TransportMode::radiance;
 };
 

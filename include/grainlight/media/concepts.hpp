@@ -25,6 +25,16 @@
 
 namespace grainlight {
 
+/// @enum EventKind
+/// What happened at the end of a free flight (see the file comment for the integrator's response).
+/// @var EventKind::scatter
+/// Real scattering event at p: continue with a new direction.
+/// @var EventKind::absorb
+/// The path ends.
+/// @var EventKind::null
+/// Pass-through (null) event: continue from p in the same direction.
+/// @var EventKind::escape
+/// No event before t_max: the path reaches the boundary at ray(t_max).
 enum class EventKind : std::uint8_t { scatter, absorb, null, escape };
 
 /// How next-event estimation works at an event.
@@ -34,19 +44,27 @@ enum class NeeKind : std::uint8_t {
     custom  ///< the medium provides its own (Moon07's p_r and f_a(d))
 };
 
+/// Result of Medium::sample_interaction: the event kind, where it happened, an optional
+/// medium-chosen direction, and the throughput weight (see the file comment). A plain value.
 template <std::floating_point F, class S>
 struct Interaction {
+    /// Event kind (escape by default).
     EventKind kind = EventKind::escape;
     F t = F(0);                ///< distance travelled along the ray
     Vec3<F> p{F(0)};           ///< position of the event (may differ from ray(t): teleports)
     Vec3<F> w{F(0)};           ///< new direction if `has_direction`
     F direction_pdf = F(0);    ///< pdf of `w` (solid angle) if `has_direction`
     S weight = S(F(1));        ///< throughput multiplier
+    /// True if the medium chose the new direction `w` itself (teleportation, shells); false: sample phase().
     bool has_direction = false;
+    /// How next-event estimation connects at this event.
     NeeKind nee = NeeKind::phase;
 
+    /// True for a scattering event.
     [[nodiscard]] bool is_scatter() const noexcept { return kind == EventKind::scatter; }
+    /// True if no event happened before t_max.
     [[nodiscard]] bool is_escape() const noexcept { return kind == EventKind::escape; }
+    /// True if the path was absorbed.
     [[nodiscard]] bool is_absorb() const noexcept { return kind == EventKind::absorb; }
 };
 

@@ -21,17 +21,28 @@
 
 namespace grainlight {
 
+/// Homogeneous medium of the radiative transfer equation: extinction sigma_t and albedo per
+/// channel and one phase function. Free flights are sampled analogously in one channel chosen
+/// uniformly (spectral MIS weights in Interaction::weight when channels differ), absorption by
+/// Russian roulette on the mean collision weight. Immutable; thread-safe for queries (the Rng is
+/// the caller's). Models Medium and PhaseMedium.
 template <PhaseFunction Phase, SpectrumType S = typename Phase::Spectrum>
 class ContinuousMedium {
 public:
+    /// Floating-point type (the phase function's).
     using Float = typename Phase::Float;
+    /// Short alias of Float.
     using F = Float;
+    /// Spectrum type of coefficients and weights.
     using Spectrum = S;
+    /// The phase function type.
     using PhaseType = Phase;
+    /// Number of spectral channels.
     static constexpr std::size_t channels = S::size;
 
     /// \param sigma_t extinction coefficient per channel (>= 0, finite; 1/length)
     /// \param albedo  single-scattering albedo sigma_s / sigma_t per channel, in [0, 1]
+    /// \param phase   phase function (moved in)
     ContinuousMedium(const S& sigma_t, const S& albedo, Phase phase)
         : sigma_t_(sigma_t), albedo_(albedo), phase_(std::move(phase)) {
         for (std::size_t c = 0; c < channels; ++c) {
@@ -46,14 +57,20 @@ public:
     /// Grey convenience: the same sigma_t and albedo in every channel.
     ContinuousMedium(F sigma_t, F albedo, Phase phase) : ContinuousMedium(S(sigma_t), S(albedo), std::move(phase)) {}
 
+    /// Extinction coefficient sigma_t per channel [1/length].
     [[nodiscard]] const S& sigma_t() const noexcept { return sigma_t_; }
+    /// Single-scattering albedo sigma_s / sigma_t per channel, in [0, 1].
     [[nodiscard]] const S& albedo() const noexcept { return albedo_; }
+    /// Scattering coefficient sigma_s = albedo sigma_t per channel [1/length].
     [[nodiscard]] S sigma_s() const noexcept { return sigma_t_ * albedo_; }
+    /// Absorption coefficient sigma_a = sigma_t - sigma_s per channel [1/length].
     [[nodiscard]] S sigma_a() const noexcept { return sigma_t_ - sigma_s(); }
+    /// The phase function.
     [[nodiscard]] const Phase& phase() const noexcept { return phase_; }
 
     /// Transmittance exp(-sigma_t t) per channel (deterministic; rng unused).
     [[nodiscard]] S transmittance(const Ray<F>&, F t, Rng&) const noexcept { return transmittance(t); }
+    /// Transmittance exp(-sigma_t t) per channel over distance t >= 0.
     [[nodiscard]] S transmittance(F t) const noexcept {
         S tr;
         for (std::size_t c = 0; c < channels; ++c) tr[c] = sigma_t_[c] > 0 ? std::exp(-sigma_t_[c] * t) : F(1);
@@ -101,6 +118,7 @@ public:
         return it;
     }
 
+    /// Human-readable description (channel 0's sigma_t and albedo).
     [[nodiscard]] std::string to_string() const {
         std::string s = "ContinuousMedium[sigma_t[0] = " + std::to_string(double(sigma_t_[0])) +
                         ", albedo[0] = " + std::to_string(double(albedo_[0])) + "]";

@@ -39,6 +39,14 @@ struct ScatterometerGrid {
     std::uint32_t chord_bins = 64;      ///< pass-through chord histogram on [0, 2]
 
     /// Fixed table ranges (unit bounding sphere).
+    /// @var along_min
+    /// Lower end of the TT table's along range (x_o - x_i) . w_i.
+    /// @var along_max
+    /// Upper end of the along range.
+    /// @var across_max
+    /// Upper end of the across range |(x_o - x_i) x w_i| (from 0).
+    /// @var chord_max
+    /// Upper end of the pass-through chord histogram (from 0; the bounding sphere's diameter).
     static constexpr double along_min = -2.0, along_max = 2.0, across_max = 2.0, chord_max = 2.0;
 
     /// Number of cells of the TT table.
@@ -85,6 +93,7 @@ struct ScatterometerGrid {
     [[nodiscard]] static double dphi_center(std::uint32_t k, std::uint32_t n) noexcept {
         return -pi_v<double> + 2.0 * pi_v<double> * double(k) / double(n);
     }
+    /// Edges of n bins of cos theta on [-1, 1], uniform in theta (n + 1 values, ascending from -1 to 1).
     [[nodiscard]] static std::vector<double> mu_edges(std::uint32_t n) {
         std::vector<double> e(n + 1);
         for (std::uint32_t k = 0; k <= n; ++k) e[k] = std::cos(pi_v<double> * double(n - k) / double(n));
@@ -244,14 +253,6 @@ private:
     }
 };
 
-/// Statistics of a mixture of grains (Meng15 Sec. 4.2.3): a bounding sphere holds grain k with
-/// probability weights[k] / sum(weights). Because GrainStats stores per-incident-ray
-/// expectations, the mixture is the weighted average of the stored arrays; the derived
-/// quantities are then the correctly conditioned averages (alpha_s weighted by w_k beta_k,
-/// lambda_s and Phi by w_k beta_k alpha_k, lambda_delta by w_k (1 - beta_k)); for grains of
-/// equal beta and alpha_s this is the plain weighted average of the paper. Throws
-/// grainlight::invalid_argument if the lists are empty or of different sizes, a weight is
-/// negative or not finite, the weights do not sum to a positive number, or the grids differ.
 /// Validate mixing weights for `count` grains (as mix_grain_stats does): sizes equal, every
 /// weight finite and >= 0, positive sum. Returns the sum; throws grainlight::invalid_argument.
 inline double validate_mix_weights(std::span<const double> weights, std::size_t count) {
@@ -269,6 +270,14 @@ inline double validate_mix_weights(std::span<const double> weights, std::size_t 
     return wsum;
 }
 
+/// Statistics of a mixture of grains (Meng15 Sec. 4.2.3): a bounding sphere holds grain k with
+/// probability weights[k] / sum(weights). Because GrainStats stores per-incident-ray
+/// expectations, the mixture is the weighted average of the stored arrays; the derived
+/// quantities are then the correctly conditioned averages (alpha_s weighted by w_k beta_k,
+/// lambda_s and Phi by w_k beta_k alpha_k, lambda_delta by w_k (1 - beta_k)); for grains of
+/// equal beta and alpha_s this is the plain weighted average of the paper. Throws
+/// grainlight::invalid_argument if the lists are empty or of different sizes, a weight is
+/// negative or not finite, the weights do not sum to a positive number, or the grids differ.
 [[nodiscard]] inline GrainStats mix_grain_stats(std::span<const GrainStats> stats, std::span<const double> weights) {
     const char* who = "mix_grain_stats";
     const double wsum = validate_mix_weights(weights, stats.size());

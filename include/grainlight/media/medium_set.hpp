@@ -48,11 +48,15 @@ concept HasAlbedo = requires(const M& m) {
 template <class F, class S, class... Ms>
 class PhaseSet {
 public:
+    /// Floating-point type.
     using Float = F;
+    /// Spectrum type.
     using Spectrum = S;
 
+    /// View of the variant `media` (not owned; must outlive this object).
     explicit PhaseSet(const std::variant<Ms...>* media) noexcept : media_(media) {}
 
+    /// Phase value and pdf of the active medium (0 if that medium has no phase function).
     [[nodiscard]] PhaseEval<F, S> eval(const Vec3<F>& w_in, const Vec3<F>& w_out) const noexcept {
         return std::visit(
             [&](const auto& m) -> PhaseEval<F, S> {
@@ -63,6 +67,7 @@ public:
             },
             *media_);
     }
+    /// Direction sample of the active medium's phase function (pdf 0, i.e. no sample, if it has none).
     [[nodiscard]] PhaseSample<F, S> sample(const Vec3<F>& w_in, Vec2<F> u) const noexcept {
         return std::visit(
             [&](const auto& m) -> PhaseSample<F, S> {
@@ -73,6 +78,7 @@ public:
             },
             *media_);
     }
+    /// Mean cosine of the active medium's phase function (0 if it has none).
     [[nodiscard]] S mean_cosine() const noexcept {
         return std::visit(
             [&](const auto& m) -> S {
@@ -96,31 +102,42 @@ class MediumSet {
     using First = std::tuple_element_t<0, std::tuple<Ms...>>;
 
 public:
+    /// Floating-point type (shared by every alternative).
     using Float = typename First::Float;
+    /// Spectrum type (shared by every alternative).
     using Spectrum = typename First::Spectrum;
+    /// Short alias of Float.
     using F = Float;
+    /// Short alias of Spectrum.
     using S = Spectrum;
     static_assert((std::same_as<typename Ms::Float, Float> && ...), "MediumSet: every medium needs the same Float");
     static_assert((std::same_as<typename Ms::Spectrum, Spectrum> && ...), "MediumSet: every medium needs the same Spectrum");
 
+    /// Holds a copy of (or moves in) `m`, one of the alternatives Ms...
     template <class M>
         requires(std::same_as<std::decay_t<M>, Ms> || ...)
     MediumSet(M&& m) : media_(std::forward<M>(m)) {}  // NOLINT: implicit on purpose
 
+    /// Copy.
     MediumSet(const MediumSet& o) : media_(o.media_) {}
+    /// Move.
     MediumSet(MediumSet&& o) noexcept : media_(std::move(o.media_)) {}
+    /// Copy assignment.
     MediumSet& operator=(const MediumSet& o) {
         media_ = o.media_;
         return *this;
     }
+    /// Move assignment.
     MediumSet& operator=(MediumSet&& o) noexcept {
         media_ = std::move(o.media_);
         return *this;
     }
 
+    /// Next event of the active medium along `ray` before `t_max` (static dispatch via std::visit, no virtual call).
     [[nodiscard]] Interaction<F, S> sample_interaction(const Ray<F>& ray, F t_max, Rng& rng) const noexcept {
         return std::visit([&](const auto& m) { return m.sample_interaction(ray, t_max, rng); }, media_);
     }
+    /// Transmittance of the active medium along `ray` over [0, t_max].
     [[nodiscard]] S transmittance(const Ray<F>& ray, F t_max, Rng& rng) const noexcept {
         return std::visit([&](const auto& m) { return m.transmittance(ray, t_max, rng); }, media_);
     }
@@ -145,6 +162,7 @@ public:
     decltype(auto) visit(Visitor&& v) const {
         return std::visit(std::forward<Visitor>(v), media_);
     }
+    /// Human-readable description: index of the active kind.
     [[nodiscard]] std::string to_string() const {
         return "MediumSet[kind " + std::to_string(media_.index()) + " of " + std::to_string(sizeof...(Ms)) + "]";
     }

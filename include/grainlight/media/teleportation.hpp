@@ -58,6 +58,8 @@ struct EffectiveRteParams {
     RGBd lambda_s{};             ///< |mean teleport vector| (world units)
     RGBd lambda_t{};             ///< Eq. 4: lambda_beta + alpha_s lambda_s
     RGBd sigma_t{};              ///< 1 / lambda_t
+    /// @var sigma_s
+    /// Scattering coefficient alpha_s sigma_t (per channel).
     RGBd sigma_s{}, sigma_a{};   ///< alpha_s sigma_t, (1 - alpha_s) sigma_t
     RGBd g{};                    ///< mean cosine of Phi
     RGBd sigma_s_reduced{};      ///< sigma_s' = (1 - g) sigma_s
@@ -152,6 +154,7 @@ class TeleportationMedium {
 public:
     /// Scalar and spectrum types (Medium concept): RGB of F.
     using Float = F;
+    /// Spectrum type: RGB of F.
     using Spectrum = grainlight::Spectrum<3, F>;
 
     /// \param stats           scatterometer statistics (a single grain or a mixture)

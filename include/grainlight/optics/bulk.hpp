@@ -4,7 +4,7 @@
 /// function f(theta) = int (|S1|^2 + |S2|^2) N(r) dr / (2 k^2 sigma_s), per wavelength.
 ///
 /// Units: radii and wavelengths (vacuum) in um, cross sections in um^2, the PSD's number density
-/// N_0 in particles per cubic metre, sigma in 1/m (sigma = N_0 <C> 1e-12). The phase function is
+/// N_0 in particles per cubic metre, sigma in 1/m (sigma = N_0 \<C\> 1e-12). The phase function is
 /// per steradian, tabulated on a theta grid dense near forward (phase/mie.hpp) and turned into a
 /// PhaseFunction by `make_phase`.
 ///
@@ -39,6 +39,7 @@ struct BulkSettings {
     std::vector<double> theta;  ///< table angles (ascending 0..pi); empty: forward_peaked_theta_grid(x_max)
     double rel_tol = 1e-3;      ///< relative accuracy of sigma_t, sigma_s
     int max_panels = 256;       ///< per wavelength
+    /// Minimum number of initial Gauss-Kronrod panels per PSD segment (>= 1).
     int min_panels_per_segment = 3;
     /// Weight of the probe-angle intensities in the error estimate (relative to C_t, C_s): the
     /// intensity at a fixed angle oscillates with r (interference), so it is held only to
@@ -48,10 +49,19 @@ struct BulkSettings {
 
 /// Bulk properties at one wavelength.
 struct BulkChannel {
+    /// Vacuum wavelength [um].
     double wavelength_um = 0;
-    double mean_C_t = 0, mean_C_s = 0, mean_C_a = 0;  ///< PSD averages <C> [um^2]
-    double sigma_t = 0, sigma_s = 0, sigma_a = 0;     ///< N_0 <C> [1/m] (Eq. 16)
-    std::vector<double> mean_intensity;               ///< <|S1|^2 + |S2|^2>(theta_i) over the PSD
+    /// @var mean_C_t
+    /// PSD average of the extinction cross section [um^2].
+    /// @var mean_C_s
+    /// PSD average of the scattering cross section [um^2].
+    double mean_C_t = 0, mean_C_s = 0, mean_C_a = 0;  ///< PSD averages \<C\> [um^2]
+    /// @var sigma_t
+    /// Extinction coefficient N_0 \<C_t\> [1/m] (Eq. 16).
+    /// @var sigma_s
+    /// Scattering coefficient N_0 \<C_s\> [1/m] (Eq. 16).
+    double sigma_t = 0, sigma_s = 0, sigma_a = 0;     ///< N_0 \<C\> [1/m] (Eq. 16)
+    std::vector<double> mean_intensity;               ///< \<|S1|^2 + |S2|^2\>(theta_i) over the PSD
     std::vector<double> phase;                        ///< Eq. 17 [1/sr] at theta_i
     double g = 0;                                     ///< mean cosine of the tabulated phase
     double phase_integral = 0;  ///< 2 pi int phase dmu (1 for Mie; GOA's C_s is analytic: ~1)
@@ -60,7 +70,9 @@ struct BulkChannel {
 
 /// Bulk properties over wavelengths, sharing one angle grid.
 struct BulkOptics {
+    /// Table angles theta_i [rad], ascending from 0 to pi, shared by every channel's phase.
     std::vector<double> theta;
+    /// One entry per wavelength, in the order requested.
     std::vector<BulkChannel> channels;
 
     /// The ensemble phase functions as a PhaseFunction with one channel per wavelength

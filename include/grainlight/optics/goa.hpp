@@ -161,6 +161,8 @@ struct GoaDeflection {
 /// Newton steps per root (no allocation).
 class GoaRaySolver {
 public:
+    /// Solver for relative index m (Re m > 0, != 1; Im m >= 0) and orders p = 0..p_max (0..1000);
+    /// throws grainlight::invalid_argument otherwise. Tabulation allocates; rays() then does not.
     GoaRaySolver(std::complex<double> m, int p_max) : m_(m), p_max_(p_max) {
         check_argument(std::isfinite(m.real()) && m.real() > 0 && m.real() != 1.0, "GoaRaySolver", "Re(m)",
                        m.real(), "> 0, != 1 (finite)");
@@ -203,7 +205,9 @@ public:
         }
     }
 
+    /// Relative refractive index m = n + i k of the sphere.
     [[nodiscard]] std::complex<double> m() const noexcept { return m_; }
+    /// Highest ray order p traced (p = 0 reflection, 1 transmission, p >= 2 with p - 1 internal reflections).
     [[nodiscard]] int p_max() const noexcept { return p_max_; }
 
     /// Calls `f(const GoaRay&)` for every ray leaving at scattering angle theta in [0, pi] [rad].
@@ -411,8 +415,11 @@ public:
         check_argument(p_max >= 0 && p_max <= 1000, "Goa", "p_max", p_max, "0..1000");
     }
 
+    /// Relative refractive index m = n + i k of the sphere.
     [[nodiscard]] std::complex<double> m() const noexcept { return m_; }
+    /// Size parameter alpha = 2 pi r / lambda (in the host).
     [[nodiscard]] double alpha() const noexcept { return alpha_; }
+    /// Highest ray order p included.
     [[nodiscard]] int p_max() const noexcept { return p_max_; }
 
     /// S1, S2 at scattering angle theta [rad] in [0, pi] (Eq. 11).
@@ -507,7 +514,9 @@ public:
             offsets_.push_back(rays_.size());
         }
     }
+    /// Number of tabulated angles.
     [[nodiscard]] std::size_t size() const noexcept { return theta_.size(); }
+    /// Tabulated scattering angles [rad], in [0, pi].
     [[nodiscard]] std::span<const double> theta() const noexcept { return theta_; }
     /// Rays at angle index i.
     [[nodiscard]] std::span<const GoaRay> rays(std::size_t i) const noexcept {
@@ -549,8 +558,13 @@ private:
 /// split at 90 deg and at the rainbow angles, next to which theta = s +- u^2 removes the
 /// integrable 1/sqrt singularity.
 struct GoaMoments {
+    /// @var i0
+    /// I_0 = int (|S1|^2 + |S2|^2) dmu over [-1, 1] (Qsca = I_0 / alpha^2).
+    /// @var i1
+    /// I_1 = int (|S1|^2 + |S2|^2) mu dmu over [-1, 1] (g = I_1 / I_0).
     double i0 = 0, i1 = 0;
 };
+/// Compute I_0 and I_1 of `goa` (diffraction included) by the quadrature described at GoaMoments.
 [[nodiscard]] inline GoaMoments goa_intensity_moments(const Goa& goa) {
     const double a = goa.alpha(), pi = detail::goa_pi;
     constexpr auto& xg = gauss_legendre_nodes<4>.x;
@@ -623,7 +637,7 @@ struct GoaMoments {
     return m;
 }
 
-/// GOA asymmetry parameter g = <cos theta> by quadrature of |S1|^2 + |S2|^2 (goa_intensity_moments).
+/// GOA asymmetry parameter g = \<cos theta\> by quadrature of |S1|^2 + |S2|^2 (goa_intensity_moments).
 [[nodiscard]] inline double goa_asymmetry_parameter(const Goa& goa) {
     const auto m = goa_intensity_moments(goa);
     return m.i0 > 0 ? m.i1 / m.i0 : 0.0;
@@ -704,6 +718,7 @@ struct GoaEfficiencies {
     double qext = 0;  ///< Eq. 12
     double qabs = 0;  ///< ray-optics absorption (Goa::qabs)
     double qsca = 0;  ///< qext - qabs
+    /// Whether GOA is trustworthy at this (m, x) (see goa_validity).
     GoaValidity validity;
 };
 

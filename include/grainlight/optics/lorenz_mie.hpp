@@ -44,7 +44,7 @@ struct MieEfficiencies {
     double qsca = 0;   ///< scattering efficiency
     double qabs = 0;   ///< absorption efficiency, qext - qsca (>= 0 up to round-off)
     double qback = 0;  ///< backscattering efficiency 4 |S1(180 deg)|^2 / x^2
-    double g = 0;      ///< asymmetry parameter <cos theta> (0 when qsca = 0)
+    double g = 0;      ///< asymmetry parameter \<cos theta\> (0 when qsca = 0)
 };
 
 /// The two complex scattering amplitudes at one angle (van de Hulst convention, see file doc).
@@ -204,12 +204,15 @@ public:
         compute_coefficients();
     }
 
+    /// Relative refractive index m = n + i k given at construction.
     [[nodiscard]] std::complex<double> m() const noexcept { return m_; }
+    /// Size parameter x = 2 pi n_host r / lambda_vacuum.
     [[nodiscard]] double x() const noexcept { return x_; }
     /// Number of series terms N.
     [[nodiscard]] std::size_t num_terms() const noexcept { return ab_.size() / 2; }
     /// a_n, b_n for n = 1..N (index n-1), van de Hulst convention.
     [[nodiscard]] std::span<const std::complex<double>> a() const noexcept { return {ab_.data(), num_terms()}; }
+    /// b_n for n = 1..N (index n-1), van de Hulst convention.
     [[nodiscard]] std::span<const std::complex<double>> b() const noexcept {
         return {ab_.data() + num_terms(), num_terms()};
     }

@@ -44,6 +44,7 @@ struct ParticleCrossSections {
 struct ParticleModel {
     std::complex<double> particle_index{1.33, 0.0};  ///< n + i k of the particle material (k >= 0)
     double host_index = 1.0;                         ///< real index of the host medium
+    /// Mie, GOA, or automatic choice by switch_radius_um.
     ScatteringMethod method = ScatteringMethod::automatic;
     double switch_radius_um = default_switch_radius_um;  ///< automatic: GOA for r >= this
     int p_max = 3;                                       ///< GOA orders 0..p_max (Guo21 uses 3)
@@ -115,15 +116,20 @@ public:
         }
     }
 
+    /// Particle radius [um].
     [[nodiscard]] double radius_um() const noexcept { return r_; }
+    /// Vacuum wavelength [um].
     [[nodiscard]] double wavelength_um() const noexcept { return lambda_; }
     /// Wavenumber in the host, 2 pi n_host / lambda [1/um].
     [[nodiscard]] double wavenumber() const noexcept { return k_; }
+    /// Size parameter x = k r (k in the host).
     [[nodiscard]] double size_parameter() const noexcept { return x_; }
+    /// Method actually used for this particle (automatic resolved to mie or goa).
     [[nodiscard]] ScatteringMethod method() const noexcept { return used_; }
     /// Whether GOA is valid at this (m, x) (goa.hpp); for ScatteringMethod::goa outside it the
     /// results are computed but flagged here.
     [[nodiscard]] const GoaValidity& goa_validity() const noexcept { return validity_; }
+    /// Settings the particle was built with.
     [[nodiscard]] const ParticleModel& model() const noexcept { return model_; }
 
     /// S1, S2 at scattering angle theta [rad], 0 <= theta <= pi.
@@ -170,7 +176,9 @@ public:
         return intensity_at_angle(theta) / (2 * k_ * k_ * c_s_eq2_);
     }
 
+    /// The Mie solver when method() is mie (empty otherwise).
     [[nodiscard]] const std::optional<LorenzMie>& mie() const noexcept { return mie_; }
+    /// The GOA solver when method() is goa (empty otherwise).
     [[nodiscard]] const std::optional<Goa>& goa() const noexcept { return goa_; }
 
 private:

@@ -73,10 +73,15 @@ public:
         check_argument(mass_ > 1e-300, who, "[r_min, r_max]", r_max, "an interval holding part of the distribution");
     }
 
+    /// Geometric mean radius r_g [um].
     [[nodiscard]] double r_g() const noexcept { return std::exp(mu_); }
+    /// Geometric standard deviation sigma_g (> 1).
     [[nodiscard]] double sigma_g() const noexcept { return std::exp(s_); }
+    /// Lower truncation radius [um].
     [[nodiscard]] double r_min() const noexcept { return r_min_; }
+    /// Upper truncation radius [um] (may be +inf).
     [[nodiscard]] double r_max() const noexcept { return r_max_; }
+    /// Number density N_0 of the particles inside [r_min, r_max] [1/m^3].
     [[nodiscard]] double number_density() const noexcept { return n0_; }
     /// Fraction of the untruncated log-normal inside [r_min, r_max].
     [[nodiscard]] double truncated_mass() const noexcept { return mass_; }
@@ -89,6 +94,7 @@ public:
     }
     /// N(r) = number_density * pdf(r) (Eq. 15 with truncation).
     [[nodiscard]] double density(double r) const noexcept { return n0_ * pdf(r); }
+    /// Cumulative distribution on [r_min, r_max]: fraction of the particles with radius <= r.
     [[nodiscard]] double cdf(double r) const noexcept {
         if (r <= r_min_ || r <= 0) return 0.0;
         if (r >= r_max_) return 1.0;
@@ -125,6 +131,9 @@ private:
 /// particles before truncation (e.g. 1.99e7 / 2e7).
 class BimodalLogNormalPsd {
 public:
+    /// Two log-normal modes (r_g1, sigma_g1) and (r_g2, sigma_g2) (radii in um, sigma > 1), mode 1
+    /// holding `fraction1` in [0, 1] of the untruncated particles, truncated to [r_min, r_max], with
+    /// number_density >= 0 [1/m^3] particles inside; throws grainlight::invalid_argument otherwise.
     BimodalLogNormalPsd(double r_g1, double sigma_g1, double r_g2, double sigma_g2, double fraction1,
                         double r_min = 0.0, double r_max = std::numeric_limits<double>::infinity(),
                         double number_density = 1.0)
@@ -136,22 +145,32 @@ public:
         const double a = fraction1 * m1_.truncated_mass(), b = (1 - fraction1) * m2_.truncated_mass();
         w1_ = a / (a + b);
     }
+    /// Lower truncation radius [um].
     [[nodiscard]] double r_min() const noexcept { return m1_.r_min(); }
+    /// Upper truncation radius [um] (may be +inf).
     [[nodiscard]] double r_max() const noexcept { return m1_.r_max(); }
+    /// Number density N_0 inside [r_min, r_max] [1/m^3].
     [[nodiscard]] double number_density() const noexcept { return n0_; }
     /// Share of mode 1 among the particles inside [r_min, r_max].
     [[nodiscard]] double weight1() const noexcept { return w1_; }
+    /// Mode 1 (normalized on its own).
     [[nodiscard]] const LogNormalPsd& mode1() const noexcept { return m1_; }
+    /// Mode 2 (normalized on its own).
     [[nodiscard]] const LogNormalPsd& mode2() const noexcept { return m2_; }
+    /// Normalized mixture density [1/um].
     [[nodiscard]] double pdf(double r) const noexcept { return w1_ * m1_.pdf(r) + (1 - w1_) * m2_.pdf(r); }
+    /// N(r) = number_density * pdf(r) [1/(um m^3)].
     [[nodiscard]] double density(double r) const noexcept { return n0_ * pdf(r); }
+    /// Cumulative distribution of the mixture.
     [[nodiscard]] double cdf(double r) const noexcept { return w1_ * m1_.cdf(r) + (1 - w1_) * m2_.cdf(r); }
     /// Picks the mode with u, re-uses the rescaled u inside it.
     [[nodiscard]] double sample(double u) const {
         if (u < w1_) return m1_.sample(w1_ > 0 ? u / w1_ : 0.0);
         return m2_.sample(std::min((u - w1_) / (1 - w1_), 1 - 1e-16));
     }
+    /// E[r^k] of the mixture [um^k].
     [[nodiscard]] double moment(double k) const noexcept { return w1_ * m1_.moment(k) + (1 - w1_) * m2_.moment(k); }
+    /// Sorted union of both modes' breakpoints, for quadrature.
     [[nodiscard]] std::vector<double> breakpoints() const {
         auto b = m1_.breakpoints();
         for (double r : m2_.breakpoints()) b.push_back(r);
@@ -173,17 +192,26 @@ private:
 /// properties (optics/bulk.hpp) evaluate the single radius directly (sigma = N_0 C(r_0)).
 class MonodispersePsd {
 public:
+    /// All particles of radius `radius` > 0 [um], `number_density` >= 0 of them per m^3; throws
+    /// grainlight::invalid_argument otherwise.
     explicit MonodispersePsd(double radius, double number_density = 1.0) : r0_(radius), n0_(number_density) {
         check_argument(std::isfinite(radius) && radius > 0, "MonodispersePsd", "radius", radius, "> 0 (finite)");
         check_argument(std::isfinite(number_density) && number_density >= 0, "MonodispersePsd", "number_density",
                        number_density, ">= 0 (finite)");
     }
+    /// The common radius r_0 [um].
     [[nodiscard]] double radius() const noexcept { return r0_; }
+    /// r_0 (the support is one point).
     [[nodiscard]] double r_min() const noexcept { return r0_; }
+    /// r_0 (the support is one point).
     [[nodiscard]] double r_max() const noexcept { return r0_; }
+    /// Number density N_0 [1/m^3].
     [[nodiscard]] double number_density() const noexcept { return n0_; }
+    /// Step CDF: 0 below r_0, 1 from r_0 on.
     [[nodiscard]] double cdf(double r) const noexcept { return r >= r0_ ? 1.0 : 0.0; }
+    /// Always r_0.
     [[nodiscard]] double sample(double) const noexcept { return r0_; }
+    /// E[r^k] = r_0^k [um^k].
     [[nodiscard]] double moment(double k) const noexcept { return std::pow(r0_, k); }
 
 private:
@@ -194,6 +222,9 @@ private:
 /// binned from a particle realization (Guo21 Fig. 7). r_min = r_0, r_max = r_n.
 class TabulatedPsd {
 public:
+    /// Densities (>= 0, linear between nodes, positive integral) at radii (>= 2, >= 0, strictly
+    /// increasing) [um], normalized internally; number_density >= 0 [1/m^3] particles in total.
+    /// Throws grainlight::invalid_argument otherwise.
     TabulatedPsd(std::span<const double> radii, std::span<const double> densities, double number_density = 1.0)
         : n0_(number_density) {
         const char* who = "TabulatedPsd";
@@ -209,18 +240,25 @@ public:
         dist_ = PiecewiseLinear1D<double>(radii, densities);
         r_.assign(radii.begin(), radii.end());
     }
+    /// Smallest tabulated radius r_0 [um].
     [[nodiscard]] double r_min() const noexcept { return r_.front(); }
+    /// Largest tabulated radius r_n [um].
     [[nodiscard]] double r_max() const noexcept { return r_.back(); }
+    /// Number density N_0 [1/m^3].
     [[nodiscard]] double number_density() const noexcept { return n0_; }
+    /// Normalized density [1/um] (0 outside [r_0, r_n]).
     [[nodiscard]] double pdf(double r) const noexcept {
         return (r >= r_.front() && r <= r_.back()) ? dist_.pdf(r) : 0.0;
     }
+    /// N(r) = number_density * pdf(r).
     [[nodiscard]] double density(double r) const noexcept { return n0_ * pdf(r); }
+    /// Cumulative distribution (exact for the piecewise-linear density).
     [[nodiscard]] double cdf(double r) const noexcept {
         if (r <= r_.front()) return 0.0;
         if (r >= r_.back()) return 1.0;
         return dist_.invert(r);
     }
+    /// Radius for u in [0, 1) by exact inversion.
     [[nodiscard]] double sample(double u) const noexcept { return dist_.sample(u); }
     /// E[r^k], exact for the piecewise-linear density (Gauss-Legendre, 8 points per interval).
     [[nodiscard]] double moment(double k) const noexcept {
@@ -236,6 +274,7 @@ public:
         }
         return m;
     }
+    /// The tabulated radii (the density's kinks), for quadrature.
     [[nodiscard]] std::vector<double> breakpoints() const { return r_; }
 
 private:

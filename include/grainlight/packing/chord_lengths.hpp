@@ -56,6 +56,7 @@ struct ChordMeasurement {
     double void_length = 0;              ///< total length of the lines outside spheres
     std::uint64_t entries = 0;           ///< number of sphere entries along the lines
     std::uint64_t complete_chords = 0;   ///< chords whose both ends lie on the lines
+    /// Mean outer chord void_length / entries (NaN when no sphere was entered).
     [[nodiscard]] double mean() const noexcept {
         return entries ? void_length / double(entries) : std::numeric_limits<double>::quiet_NaN();
     }

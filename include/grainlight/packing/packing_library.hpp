@@ -22,7 +22,9 @@ namespace grainlight {
 /// Tiles sorted by packing rate. Lookups are by nearest rate.
 class PackingLibrary {
 public:
+    /// Payload type code of the library file format (see core/serialization.hpp).
     static constexpr std::uint32_t file_kind = fourcc("TLIB");
+    /// Version of the library payload layout.
     static constexpr std::uint32_t file_kind_version = 1;
 
     PackingLibrary() = default;

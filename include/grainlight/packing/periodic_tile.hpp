@@ -36,18 +36,26 @@ namespace grainlight {
 /// A sphere of the infinite tiling: its id inside the tile, the tile it belongs to, and its
 /// centre in world coordinates (tile * L + centre in the tile).
 struct TileSphereRef {
+    /// Sphere id inside the tile.
     std::uint32_t sphere = 0;
+    /// Tile the sphere belongs to (absolute index).
     Vec3i64 tile{0, 0, 0};
+    /// Sphere centre in world coordinates.
     Vec3d center{0.0};
 };
 
 /// Result of a ray query on the tiling: the sphere hit, the ray parameters where the ray enters
 /// and leaves it (t_enter may be below the query's t_min when the ray starts inside the sphere).
 struct TileHit {
+    /// True if a sphere was hit.
     bool hit = false;
+    /// Ray parameter where the ray enters the sphere (may be below t_min if it starts inside).
     double t_enter = std::numeric_limits<double>::infinity();
+    /// Ray parameter where the ray leaves the sphere.
     double t_exit = std::numeric_limits<double>::infinity();
+    /// Id of the sphere hit inside the tile.
     std::uint32_t sphere = 0;
+    /// Tile of the sphere hit (absolute index).
     Vec3i64 tile{0, 0, 0};
     /// True if a sphere was hit.
     explicit operator bool() const noexcept { return hit; }
@@ -138,6 +146,7 @@ class PeriodicTile {
 public:
     /// Payload type code and version of the tile file format (see serialization.hpp).
     static constexpr std::uint32_t file_kind = fourcc("TILE");
+    /// Version of the tile payload layout.
     static constexpr std::uint32_t file_kind_version = 1;
 
     /// Build and validate a tile. `cell_size_in_radii` sets the ray-query grid cell width
@@ -202,6 +211,7 @@ public:
     /// Distance beyond which first_hit stops searching when t_max is infinite: a ray along a
     /// channel of a periodic packing may never hit a sphere. Default 4096 L.
     [[nodiscard]] double max_search_distance() const noexcept { return max_search_; }
+    /// Set max_search_distance() to d > 0 (world units); throws grainlight::invalid_argument otherwise. Not thread-safe: call before sharing the tile.
     void set_max_search_distance(double d) {
         check_argument(d > 0, "PeriodicTile::set_max_search_distance", "d", d, "> 0");
         max_search_ = d;

@@ -26,7 +26,9 @@ namespace grainlight {
 /// which `sample` would produce the same w_out. For a grey phase function value == pdf.
 template <std::floating_point F, class S>
 struct PhaseEval {
+    /// Phase value per unit solid angle in each channel [1/sr].
     S value;
+    /// Solid-angle density [1/sr] with which sample() produces the same w_out (mixture pdf for chromatic tables).
     F pdf;
 };
 
@@ -34,9 +36,13 @@ struct PhaseEval {
 /// A pdf of 0 means "no sample" (never produced by the phase functions of this library).
 template <std::floating_point F, class S>
 struct PhaseSample {
+    /// Sampled outgoing propagation direction (unit length).
     Vec3<F> w;
+    /// Per-channel Monte Carlo weight value / pdf (1 in every channel for grey phase functions).
     S weight;
+    /// Solid-angle density of w [1/sr]; 0 means no sample.
     F pdf;
+    /// True if the sample is valid (pdf > 0).
     [[nodiscard]] explicit operator bool() const noexcept { return pdf > F(0); }
 };
 

@@ -10,12 +10,17 @@
 
 namespace grainlight {
 
+/// Isotropic phase function 1/(4 pi) in every channel: a PhaseFunction (phase/concepts.hpp),
+/// stateless and thread-safe.
 template <std::floating_point F = float, class S = Spectrum<1, F>>
 class IsotropicPhase {
 public:
+    /// Floating-point type of directions and pdfs.
     using Float = F;
+    /// Spectrum type of values and weights.
     using Spectrum = S;
 
+    /// Value and pdf 1/(4 pi) for any pair of directions.
     [[nodiscard]] PhaseEval<F, S> eval(const Vec3<F>&, const Vec3<F>&) const noexcept {
         return {S(inv_four_pi_v<F>), inv_four_pi_v<F>};
     }
@@ -27,7 +32,9 @@ public:
     }
     /// Density of cos(theta) on [-1, 1] (= 1/2).
     [[nodiscard]] F pdf_cos_theta(F) const noexcept { return F(0.5); }
+    /// Mean cosine 0 in every channel.
     [[nodiscard]] S mean_cosine() const noexcept { return S(F(0)); }
+    /// Human-readable description, "IsotropicPhase[]".
     [[nodiscard]] std::string to_string() const { return "IsotropicPhase[]"; }
 };
 

@@ -61,7 +61,9 @@ class LorenzMie;  // optics/lorenz_mie.hpp (only MiePhase::from_mie uses it)
 template <std::floating_point F = float, class S = Spectrum<1, F>>
 class MiePhase {
 public:
+    /// Floating-point type of directions and pdfs.
     using Float = F;
+    /// Spectrum type of values and weights.
     using Spectrum = S;
 
     MiePhase() = default;
@@ -135,17 +137,23 @@ public:
         return from_amplitudes([&](double mu) { return mie.amplitudes(mu); }, x, theta);
     }
 
+    /// Per-channel phase value and mixture pdf for propagation directions w_in, w_out (see TabulatedPhase::eval).
     [[nodiscard]] PhaseEval<F, S> eval(const Vec3<F>& w_in, const Vec3<F>& w_out) const noexcept {
         return table_.eval(w_in, w_out);
     }
+    /// Draw w_out around w_in from the tables (see TabulatedPhase::sample); the weight corrects for the channel mixture.
     [[nodiscard]] PhaseSample<F, S> sample(const Vec3<F>& w_in, Vec2<F> u) const noexcept {
         return table_.sample(w_in, u);
     }
+    /// Per-channel asymmetry parameter g (mean cosine) of the tabulated phase.
     [[nodiscard]] S mean_cosine() const noexcept { return table_.mean_cosine(); }
     /// Normalized density of cos(theta) for channel c (integral over [-1, 1] is 1).
     [[nodiscard]] double pdf_cos_theta(double mu, std::size_t c = 0) const noexcept { return table_.pdf_cos_theta(mu, c); }
+    /// The underlying per-channel table over cos theta.
     [[nodiscard]] const TabulatedPhase<F, S>& table() const noexcept { return table_; }
+    /// Angles theta_i [rad] (ascending, 0 to pi) the table was built on.
     [[nodiscard]] std::span<const double> theta_grid() const noexcept { return theta_; }
+    /// Human-readable description including the table's.
     [[nodiscard]] std::string to_string() const { return "MiePhase[" + table_.to_string() + "]"; }
 
 private:

@@ -27,12 +27,27 @@
 
 namespace grainlight {
 
+/// Phase function tabulated over mu = cos theta on [-1, 1], one table per channel of S: either
+/// piecewise linear through node values (from_values) or piecewise constant per bin (from_histogram,
+/// e.g. a scatterometer's output). Every channel is normalized separately; directions are drawn by
+/// exact inversion of one channel's CDF chosen uniformly (a single table when all channels agree,
+/// is_grey()), so eval's pdf is the channel mixture and sample's weight is value / pdf per channel.
+/// A PhaseFunction (phase/concepts.hpp); immutable after construction, thread-safe for reads.
 template <std::floating_point F = float, class S = Spectrum<1, F>>
 class TabulatedPhase {
 public:
+    /// Floating-point type of directions and pdfs.
     using Float = F;
+    /// Spectrum type of values and weights.
     using Spectrum = S;
+    /// Number of channels of S, i.e. of separate tables.
     static constexpr std::size_t channels = S::size;
+    /// @enum Interpolation
+    /// How values between grid points are reconstructed.
+    /// @var Interpolation::linear
+    /// Piecewise linear between node values (from_values).
+    /// @var Interpolation::constant
+    /// Constant per bin (from_histogram).
     enum class Interpolation { linear, constant };
 
     TabulatedPhase() = default;
@@ -75,6 +90,7 @@ public:
         t.finish();
         return t;
     }
+    /// Grey convenience overload: one (weighted) count per bin, the same in every channel.
     [[nodiscard]] static TabulatedPhase from_histogram(std::span<const double> edges, std::span<const double> counts) {
         std::vector<S> sv(counts.size());
         for (std::size_t i = 0; i < counts.size(); ++i) sv[i] = S(F(counts[i]));
@@ -93,6 +109,7 @@ public:
         return p / double(channels);
     }
 
+    /// Per-channel phase value [1/sr] and mixture pdf for propagation directions w_in, w_out.
     [[nodiscard]] PhaseEval<F, S> eval(const Vec3<F>& w_in, const Vec3<F>& w_out) const noexcept {
         const double mu = std::clamp(double(glm::dot(w_in, w_out)), -1.0, 1.0);
         if (grey_) {
@@ -109,6 +126,8 @@ public:
         return {value, F(sum / double(channels) * inv_two_pi_v<double>)};
     }
 
+    /// Draw w_out around w_in: u.x picks the channel (when not grey) and then mu by exact inversion,
+    /// u.y the azimuth; weight = per-channel value / mixture pdf.
     [[nodiscard]] PhaseSample<F, S> sample(const Vec3<F>& w_in, Vec2<F> u) const noexcept {
         double ux = double(u.x);
         std::size_t c = 0;
@@ -131,12 +150,15 @@ public:
 
     /// Per-channel mean cosine g_c = int mu p_c(mu) dmu (exact for the interpolant).
     [[nodiscard]] S mean_cosine() const noexcept { return mean_cosine_; }
+    /// Interpolation mode: linear (from_values) or constant (from_histogram).
     [[nodiscard]] Interpolation interpolation() const noexcept { return mode_; }
+    /// True if all channels' normalized tables are identical (to 1e-12): then eval's pdf equals every channel's value.
     [[nodiscard]] bool is_grey() const noexcept { return grey_; }
     /// Grid nodes (linear) or bin edges (histogram).
     [[nodiscard]] std::span<const double> grid() const noexcept {
         return mode_ == Interpolation::linear ? lin_[0].nodes() : pc_[0].nodes();
     }
+    /// Human-readable description: mode, grid size and per-channel g.
     [[nodiscard]] std::string to_string() const {
         std::string s = "TabulatedPhase[";
         s += mode_ == Interpolation::linear ? "linear, " : "histogram, ";

@@ -80,9 +80,11 @@ using ScatterometerGrain = Grain;
 /// Scatterometer settings.
 struct ScatterometerConfig {
     std::uint64_t rays = 1000000;  ///< incident rays (>= 1)
+    /// Seed of the counter-based generators (ray i uses Pcg32::from_key(seed, i, ...)): same seed, same statistics on any thread count.
     std::uint64_t seed = 1;
     std::uint32_t max_bounces = 10000;  ///< paths longer than this are counted as absorbed (and as `terminated`)
     bool random_rotation = true;        ///< rotate the grain uniformly per ray (Meng15 Sec. 4.1)
+    /// Binning of the recorded statistics (phase, TT table, chords).
     ScatterometerGrid grid{};
     /// Optional progress callback (rays done, total), called from one thread at a time.
     std::function<void(std::uint64_t, std::uint64_t)> progress{};

@@ -20,9 +20,13 @@
 
 namespace grainlight {
 
+/// Pinhole (perspective) camera: primary rays from `eye` through a film of width x height pixels
+/// with vertical field of view fov_y, each ray carrying a cone of the pixel's spread angle.
+/// Immutable after construction; generate_ray and project are thread-safe.
 template <std::floating_point F = float>
 class PinholeCamera {
 public:
+    /// Floating-point type of rays.
     using Float = F;
 
     /// Throws grainlight::invalid_argument on width/height < 1, fov outside (0, 180) degrees,
@@ -46,9 +50,13 @@ public:
         spread_ = F(2) * tan_half_ / F(height);
     }
 
+    /// Film width in pixels.
     [[nodiscard]] int width() const noexcept { return width_; }
+    /// Film height in pixels.
     [[nodiscard]] int height() const noexcept { return height_; }
+    /// Camera position (origin of every primary ray).
     [[nodiscard]] const Vec3<F>& eye() const noexcept { return eye_; }
+    /// Unit viewing direction.
     [[nodiscard]] const Vec3<F>& forward() const noexcept { return forward_; }
     /// Pixel spread angle (radians) of the ray cones.
     [[nodiscard]] F spread_angle() const noexcept { return spread_; }
@@ -75,6 +83,7 @@ public:
         return px >= F(0) && px < F(width_) && py >= F(0) && py < F(height_);
     }
 
+    /// Human-readable description (resolution and tan(fov/2)).
     [[nodiscard]] std::string to_string() const {
         return "PinholeCamera[" + std::to_string(width_) + "x" + std::to_string(height_) +
                ", tan(fov/2) = " + std::to_string(tan_half_) + "]";

@@ -37,6 +37,7 @@ struct SurfaceHit {
     F t = std::numeric_limits<F>::infinity();  ///< distance along the (unit) ray direction
     Vec3<F> p{F(0)};                           ///< hit point
     Vec3<F> n{F(0), F(0), F(1)};               ///< unit geometric normal, pointing to the outside
+    /// How the walk kernel treats the surface (absorber for a miss).
     SurfaceType type = SurfaceType::absorber;
     F eta = F(1);                 ///< n_inside / n_outside (dielectric)
     S reflectance{F(0)};          ///< diffuse albedo per channel (diffuse)
@@ -44,7 +45,9 @@ struct SurfaceHit {
     int medium_outside = -1;      ///< medium in front of n (-1 = none)
     int shape = -1;               ///< shape index (scene-defined)
     int light = -1;               ///< area-light index if the surface emits, else -1
+    /// True if the ray hit a surface (t finite).
     [[nodiscard]] bool hit() const noexcept { return t < std::numeric_limits<F>::infinity(); }
+    /// Same as hit().
     [[nodiscard]] explicit operator bool() const noexcept { return hit(); }
 };
 
@@ -69,11 +72,17 @@ concept WalkScene = requires(const Sc& s, const Ray<typename Sc::Float>& r, int 
 /// point light) not yet divided by the pdf.
 template <std::floating_point F, class S>
 struct LightSample {
+    /// Unit direction from the reference point toward the light.
     Vec3<F> w{F(0), F(0), F(1)};
+    /// Distance to the sampled light point (+inf for directional and environment lights).
     F dist = std::numeric_limits<F>::infinity();
+    /// Emitted radiance (intensity / dist^2 for point and spot lights), not divided by pdf.
     S L{F(0)};
+    /// Solid-angle pdf including the light-selection probability (delta lights: the selection probability).
     F pdf = F(0);
+    /// True for a delta light (point, spot, directional): no MIS with phase or BSDF sampling.
     bool delta = false;
+    /// True if the sample is usable (pdf > 0).
     [[nodiscard]] explicit operator bool() const noexcept { return pdf > F(0); }
 };
 

@@ -29,6 +29,18 @@
 
 namespace grainlight {
 
+/// @enum LightType
+/// Kind of a Light.
+/// @var LightType::point
+/// Isotropic point light of intensity I.
+/// @var LightType::spot
+/// Point light restricted to a cone around an axis.
+/// @var LightType::quad
+/// One-sided parallelogram area light of radiance L (a scene shape).
+/// @var LightType::directional
+/// Light from infinitely far along one direction, irradiance E.
+/// @var LightType::environment
+/// Constant radiance L from every direction at infinity.
 enum class LightType : std::uint8_t { point, spot, quad, directional, environment };
 
 /// A photon leaving a light (walks that start from a light: photon tracing, light tracing).
@@ -36,23 +48,35 @@ enum class LightType : std::uint8_t { point, spot, quad, directional, environmen
 /// mean weight over photons is the light's total emitted power.
 template <std::floating_point F, class S>
 struct EmissionSample {
+    /// Photon origin and unit direction.
     Ray<F> ray;
+    /// Power carried by the photon per channel [W].
     S weight{F(0)};
+    /// False if no photon was produced (directional and environment lights; a quad direction below its surface).
     bool valid = false;
+    /// True if the sample is valid.
     [[nodiscard]] explicit operator bool() const noexcept { return valid; }
 };
 
 /// One light. Build with the factory functions (they validate).
 template <std::floating_point F, class S>
 struct Light {
+    /// Which kind of light this is.
     LightType type = LightType::point;
+    /// Position (point, spot; a quad light's corner).
     Vec3<F> position{F(0)};
     Vec3<F> direction{F(0), F(0), F(-1)};  ///< spot axis / directional travel direction (unit)
     S power{F(0)};                          ///< I (point, spot), L (quad, environment) or E (directional)
+    /// @var cos_inner
+    /// Cosine of the spot's inner half-angle (full intensity inside it).
+    /// @var cos_outer
+    /// Cosine of the spot's outer half-angle (no light outside it).
     F cos_inner = F(1), cos_outer = F(0);
+    /// The emitting parallelogram of a quad light.
     QuadShape<F> quad{};
     int shape = -1;  ///< scene shape index of a quad light
 
+    /// Isotropic point light at p with intensity I per channel (>= 0; throws grainlight::invalid_argument otherwise).
     [[nodiscard]] static Light point_light(const Vec3<F>& p, const S& intensity) {
         check_nonnegative(intensity, "point_light", "intensity");
         Light l;
@@ -80,6 +104,7 @@ struct Light {
         l.cos_outer = std::cos(outer_deg * pi_v<F> / F(180));
         return l;
     }
+    /// One-sided area light over q, emitting radiance L per channel (>= 0) into the side of q's normal.
     [[nodiscard]] static Light quad_light(const QuadShape<F>& q, const S& radiance) {
         check_nonnegative(radiance, "quad_light", "radiance");
         Light l;
@@ -101,6 +126,7 @@ struct Light {
         l.power = irradiance;
         return l;
     }
+    /// Constant radiance L per channel (>= 0) arriving from every direction.
     [[nodiscard]] static Light environment_light(const S& radiance) {
         check_nonnegative(radiance, "environment_light", "radiance");
         Light l;
@@ -109,6 +135,7 @@ struct Light {
         return l;
     }
 
+    /// True for point, spot and directional lights (cannot be hit by a ray; NEE only).
     [[nodiscard]] bool is_delta() const noexcept {
         return type == LightType::point || type == LightType::spot || type == LightType::directional;
     }

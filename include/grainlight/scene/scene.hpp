@@ -33,6 +33,7 @@ namespace grainlight {
 /// Surface material: what the walk kernel does at a hit (SurfaceType) and its parameters.
 template <std::floating_point F, class S>
 struct Material {
+    /// What the walk kernel does at a hit.
     SurfaceType type = SurfaceType::diffuse;
     S reflectance = S(F(0.5));  ///< diffuse albedo (diffuse)
     F eta = F(1);           ///< n_inside / n_outside (dielectric)
@@ -60,20 +61,34 @@ struct Material {
 template <Medium MediumT>
 class Scene {
 public:
+    /// The scene's medium type.
     using Medium = MediumT;
+    /// Floating-point type.
     using Float = typename MediumT::Float;
+    /// Spectrum type.
     using Spectrum = typename MediumT::Spectrum;
+    /// Short alias of Float.
     using F = Float;
+    /// Short alias of Spectrum.
     using S = Spectrum;
+    /// Any of the supported shapes (closed set, static dispatch).
     using Shape = std::variant<SphereShape<F>, BoxShape<F>, QuadShape<F>, MeshShape<F>, InstanceShape<F>>;
+    /// Light type of the scene.
     using LightT = Light<F, S>;
+    /// Material type of the scene.
     using MaterialT = Material<F, S>;
 
+    /// A shape with its material, the media on both sides and its light (if emitting).
     struct ShapeEntry {
+        /// The geometry.
         Shape shape;
+        /// Surface behaviour at a hit.
         MaterialT material;
+        /// Medium behind the outward normal (-1 = none).
         int medium_inside = -1;
+        /// Medium in front of the outward normal (-1 = none).
         int medium_outside = -1;
+        /// Index of the area light this shape is (-1 = not an emitter).
         int light = -1;
     };
 
@@ -113,9 +128,13 @@ public:
         return int(lights_.size()) - 1;
     }
 
+    /// Medium with index i (0 <= i < medium_count(); not checked).
     [[nodiscard]] const Medium& medium(int i) const noexcept { return media_[std::size_t(i)]; }
+    /// Number of media added.
     [[nodiscard]] std::size_t medium_count() const noexcept { return media_.size(); }
+    /// All shapes in the order added (index = shape index in SurfaceHit).
     [[nodiscard]] const std::vector<ShapeEntry>& shapes() const noexcept { return shapes_; }
+    /// All lights in the order added (index = light index).
     [[nodiscard]] const std::vector<LightT>& lights() const noexcept { return lights_; }
 
     /// Closest hit with t in (0, ray.t_max).

@@ -30,9 +30,13 @@ namespace grainlight {
 template <Medium MediumT>
 class SlabScene {
 public:
+    /// The slab's medium type.
     using Medium = MediumT;
+    /// Floating-point type.
     using Float = typename MediumT::Float;
+    /// Spectrum type.
     using Spectrum = typename MediumT::Spectrum;
+    /// Short alias of Float.
     using F = Float;
 
     /// \param medium the slab's medium; \param thickness > 0 (inf: semi-infinite);
@@ -42,8 +46,11 @@ public:
         check_argument(std::isfinite(ior) && ior > F(0), "SlabScene", "ior", ior, "(0, inf)");
     }
 
+    /// The slab's medium (the index is ignored: there is only medium 0).
     [[nodiscard]] const Medium& medium(int) const noexcept { return medium_; }
+    /// Thickness (> 0; +inf for a half-space).
     [[nodiscard]] F thickness() const noexcept { return thickness_; }
+    /// Relative index n_slab / n_outside of both faces.
     [[nodiscard]] F ior() const noexcept { return ior_; }
 
     /// Closest face hit with t in (0, ray.t_max).
@@ -91,8 +98,14 @@ struct SlabParams {
 
 /// Tallies of a batch of slab paths: R and T per-path scores (mergeable in a fixed order).
 struct SlabTally {
+    /// @var R
+    /// Per-path reflectance scores.
+    /// @var T
+    /// Per-path transmittance scores.
     Welford R, T;
+    /// Number of paths traced.
     std::uint64_t paths = 0;
+    /// Add another batch's tallies (merge in a fixed order for deterministic results).
     void merge(const SlabTally& o) noexcept {
         R.merge(o.R);
         T.merge(o.T);

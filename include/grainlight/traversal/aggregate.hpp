@@ -53,25 +53,40 @@ using GrainExemplar = Grain;
 /// A grain of the aggregate: the bounding sphere (id in the tile, absolute tile index) and its
 /// instancing (exemplar index and rotation: x_world = center + R * rotation.to_world(x_unit)).
 struct AggregateGrain {
+    /// Sphere id inside the tile.
     std::uint32_t sphere = 0;
+    /// Home tile of the bounding sphere (absolute index).
     Vec3i64 tile{0, 0, 0};
+    /// Index of the exemplar grain instanced here.
     std::uint32_t exemplar = 0;
+    /// Rotation of the exemplar into the world frame.
     Rotation<double> rotation{};
 };
 
 /// Result of a ray-grain query. `t` is in units of the ray's (unit) direction; `n` is the grain's
 /// outward unit normal at the hit (world frame); `grain` identifies the instance.
 struct AggregateHit {
+    /// True if a grain was hit.
     bool hit = false;
+    /// Ray parameter of the hit (distance for a unit direction).
     double t = std::numeric_limits<double>::infinity();
+    /// Outward unit normal of the grain at the hit (world frame).
     Vec3d n{0.0, 0.0, 1.0};
+    /// The grain instance hit.
     AggregateGrain grain{};
+    /// True if a grain was hit.
     explicit operator bool() const noexcept { return hit; }
 };
 
 /// Work counters of a query (for benchmarks): voxels visited, bounding spheres tested,
 /// instance (grain geometry) intersections.
 struct AggregateCounters {
+    /// @var voxels
+    /// Boundary voxels visited.
+    /// @var spheres
+    /// Bounding spheres tested.
+    /// @var instances
+    /// Grain geometry (instance) intersections performed.
     std::uint64_t voxels = 0, spheres = 0, instances = 0;
 };
 
@@ -92,11 +107,15 @@ public:
           exemplars_(std::move(exemplars)),
           seed_(seed) {}
 
+    /// The periodic packing tile.
     [[nodiscard]] const PeriodicTile& tile() const noexcept { return packing_.tile(); }
+    /// The voxelized aggregate boundary.
     [[nodiscard]] const VoxelizedBoundary<Shape>& boundary() const noexcept { return packing_.boundary(); }
+    /// The exemplar grains (AggregateGrain::exemplar indexes them; same order as the mixing weights).
     [[nodiscard]] const std::vector<GrainExemplar>& exemplars() const noexcept { return exemplars_; }
     /// The Algorithm 1 traversal this aggregate runs on.
     [[nodiscard]] const TiledPacking<VoxelizedBoundary<Shape>>& packing() const noexcept { return packing_; }
+    /// Instancing seed (same seed, same grain at every sphere).
     [[nodiscard]] std::uint64_t seed() const noexcept { return seed_; }
     /// Bounding-sphere radius R of the grains (world units).
     [[nodiscard]] double grain_radius() const noexcept { return tile().radius(); }

@@ -67,10 +67,13 @@ struct OctreeNode {
     Vec3<F> d{F(0), F(0), F(1)};  ///< weight-averaged direction, normalized
     F coherence = F(1);           ///< |weight-averaged unit direction| in [0, 1]
     S w{F(0)};                    ///< sum of item weights
+    /// @var begin
+    /// First item of the node's range [begin, end).
     std::uint32_t begin = 0, end = 0;   ///< item range
     std::uint32_t first_child = 0;      ///< index of the first child node
     std::uint32_t child_count = 0;      ///< 0 for a leaf
     std::uint32_t depth = 0;            ///< 0 at the root
+    /// True for a leaf (no children).
     [[nodiscard]] bool leaf() const noexcept { return child_count == 0; }
 };
 
@@ -109,14 +112,19 @@ template <std::floating_point F>
 template <std::floating_point F, class S>
 class Octree {
 public:
+    /// Item type: one light sample.
     using Item = OctreeItem<F, S>;
+    /// Node type.
     using Node = OctreeNode<F, S>;
 
     Octree() = default;
 
-    /// Build over `items` (moved in). \param max_leaf_items >= 1 (paper: 8); \param max_depth in
-    /// [1, 30]. Throws grainlight::invalid_argument on non-finite positions/directions/weights or
-    /// bad parameters. An empty item set gives an empty tree (no nodes).
+    /// Build over `items`. Throws grainlight::invalid_argument on non-finite positions/directions,
+    /// negative or non-finite weights, or bad parameters. An empty item set gives an empty tree
+    /// (no nodes).
+    /// \param items light samples (moved in; reordered by the build, see items())
+    /// \param max_leaf_items >= 1 (paper: 8)
+    /// \param max_depth in [1, 30]
     explicit Octree(std::vector<Item> items, int max_leaf_items = 8, int max_depth = 20)
         : items_(std::move(items)) {
         check_argument(max_leaf_items >= 1, "Octree", "max_leaf_items", max_leaf_items, ">= 1");
@@ -144,8 +152,11 @@ public:
               scratch);
     }
 
+    /// The items, reordered by the build (leaf ranges index into this).
     [[nodiscard]] const std::vector<Item>& items() const noexcept { return items_; }
+    /// The nodes; the root is nodes()[0] (empty for an empty tree).
     [[nodiscard]] const std::vector<Node>& nodes() const noexcept { return nodes_; }
+    /// True if the tree has no nodes (built from no items).
     [[nodiscard]] bool empty() const noexcept { return nodes_.empty(); }
     /// Depth of the deepest node.
     [[nodiscard]] std::uint32_t max_node_depth() const noexcept {

@@ -60,8 +60,12 @@ concept TileVoxelClassifier = requires(const B& b, const Vec3i64& t, const Vec3d
 
 /// The whole space is inside the aggregate (an infinite granular medium, e.g. Meng15 Fig. 9).
 struct UnboundedAggregate {
+    /// @enum Class
+    /// Voxel class of the unbounded aggregate (only inside is ever returned).
     enum class Class : std::uint8_t { outside, inside, partial };
+    /// Every tile is inside.
     [[nodiscard]] Class classify(const Vec3i64&) const noexcept { return Class::inside; }
+    /// Every point is inside.
     [[nodiscard]] bool point_inside(const Vec3i64&, const Vec3d&) const noexcept { return true; }
 };
 
@@ -76,6 +80,8 @@ struct TiledGrain {
     std::uint64_t key = 0;         ///< per-grain random key hash(seed, tile, sphere) for further use
     /// Rotation rows: local = to_local * (world - center) / radius (uniform random rotation).
     std::array<Vec3d, 3> to_local{Vec3d(1, 0, 0), Vec3d(0, 1, 0), Vec3d(0, 0, 1)};
+    /// @var t_enter
+    /// Ray parameter where the ray enters the bounding sphere.
     double t_enter = 0, t_exit = 0;  ///< bounding-sphere interval along the ray (ray parameter)
 
     /// World direction -> grain-local direction (rotation only).
@@ -95,12 +101,15 @@ struct TiledGrain {
 /// The ray in a grain's local frame: origin o and direction d such that the local point at ray
 /// parameter t is o + t d, with the same t as the world ray (d = to_local * d_world / radius).
 struct GrainRay {
+    /// Ray origin in the grain-local frame.
     Vec3d o{0.0};
+    /// Ray direction in the grain-local frame (not unit length: scaled by 1 / radius).
     Vec3d d{0.0, 0.0, 1.0};
 };
 
 /// Result of TiledPacking::intersect.
 struct TiledHit {
+    /// True if a grain was hit.
     bool hit = false;
     double t = std::numeric_limits<double>::infinity();  ///< ray parameter of the grain hit
     TiledGrain grain{};                                 ///< the grain hit
