@@ -78,7 +78,8 @@ struct GlNode {
 template <int N>
 struct GaussLegendreNodes {
     static_assert(N >= 1 && N <= 64, "constexpr Gauss-Legendre tables are for N in [1, 64]; use gauss_legendre(n)");
-    std::array<double, N> x{}, w{};
+    std::array<double, N> x{};  ///< nodes on [-1, 1], ascending
+    std::array<double, N> w{};  ///< weights (sum 2)
 };
 
 namespace detail {
