@@ -6,6 +6,7 @@
 #include <cmath>
 #include <concepts>
 #include <limits>
+#include <utility>
 
 #include "grainlight/core/config.hpp"
 #include "grainlight/core/vector.hpp"
@@ -57,6 +58,28 @@ struct Aabb {
         return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
     }
 };
+
+/// Clip the parameter interval [t0, t1] of o + t d to the closed box [lo, hi] (slab test by
+/// division; an axis-parallel ray must start inside the slab of that axis). Returns false if the
+/// segment misses the box; otherwise narrows t0 and t1 (a ray touching the box gives t0 == t1 and
+/// true). The one ray-box clip of the library; hot loops that keep the reciprocal direction use
+/// intersect_aabb below.
+template <std::floating_point F>
+[[nodiscard]] GRAINLIGHT_HOST_DEVICE inline bool clip_ray_to_box(const Vec3<F>& o, const Vec3<F>& d, const Vec3<F>& lo,
+                                                                 const Vec3<F>& hi, F& t0, F& t1) noexcept {
+    for (int a = 0; a < 3; ++a) {
+        if (d[a] == 0) {
+            if (o[a] < lo[a] || o[a] > hi[a]) return false;
+            continue;
+        }
+        F ta = (lo[a] - o[a]) / d[a], tb = (hi[a] - o[a]) / d[a];
+        if (ta > tb) std::swap(ta, tb);
+        if (ta > t0) t0 = ta;
+        if (tb < t1) t1 = tb;
+        if (t0 > t1) return false;
+    }
+    return true;
+}
 
 /// Slab test against a box for a ray with precomputed reciprocal direction `inv_d` (components
 /// may be +-inf for axis-parallel rays). Returns true if [t0, t1] overlaps the box's parametric

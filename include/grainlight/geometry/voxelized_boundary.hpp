@@ -60,22 +60,12 @@ concept BoundaryShape = requires(const B& b, const Vec3d& p) {
 };
 
 namespace detail {
-/// Slab clip of the ray o + t d to the box [lo, hi]: narrows [t0, t1]; false if empty.
+/// Slab clip of the ray o + t d to the box [lo, hi]: narrows [t0, t1]; false if empty (a ray
+/// only touching the box counts as empty here). geometry/aabb.hpp's clip_ray_to_box.
 [[nodiscard]] inline bool clip_ray_to_box(const Vec3d& o, const Vec3d& d, const Vec3d& lo, const Vec3d& hi, double& t0,
                                           double& t1) noexcept {
-    for (int a = 0; a < 3; ++a) {
-        if (d[a] == 0.0) {
-            if (o[a] < lo[a] || o[a] > hi[a]) return false;
-            continue;
-        }
-        double ta = (lo[a] - o[a]) / d[a], tb = (hi[a] - o[a]) / d[a];
-        if (ta > tb) std::swap(ta, tb);
-        t0 = std::max(t0, ta);
-        t1 = std::min(t1, tb);
-    }
-    return t0 < t1;
+    return grainlight::clip_ray_to_box<double>(o, d, lo, hi, t0, t1) && t0 < t1;
 }
-
 }  // namespace detail
 
 /// Solid sphere |p - center| < radius (radius > 0).

@@ -20,6 +20,7 @@
 
 #include "grainlight/core/config.hpp"
 #include "grainlight/core/vector.hpp"
+#include "grainlight/geometry/aabb.hpp"
 
 namespace grainlight {
 
@@ -108,23 +109,12 @@ private:
     bool done_ = false;
 };
 
-/// Clip the parameter interval [t0, t1] of o + t d to the box [lo, hi] (slab test). Returns false
-/// if the segment misses the box; otherwise narrows t0, t1.
+/// Clip the parameter interval [t0, t1] of o + t d to the box [lo, hi]: geometry/aabb.hpp's
+/// clip_ray_to_box under its traversal-layer name (kept for callers).
 template <std::floating_point F>
 [[nodiscard]] GRAINLIGHT_HOST_DEVICE inline bool clip_to_box(const Vec3<F>& o, const Vec3<F>& d, const Vec3<F>& lo,
                                                              const Vec3<F>& hi, F& t0, F& t1) noexcept {
-    for (int a = 0; a < 3; ++a) {
-        if (d[a] == 0) {
-            if (o[a] < lo[a] || o[a] > hi[a]) return false;
-            continue;
-        }
-        F ta = (lo[a] - o[a]) / d[a], tb = (hi[a] - o[a]) / d[a];
-        if (ta > tb) std::swap(ta, tb);
-        if (ta > t0) t0 = ta;
-        if (tb < t1) t1 = tb;
-        if (t0 > t1) return false;
-    }
-    return true;
+    return clip_ray_to_box(o, d, lo, hi, t0, t1);
 }
 
 }  // namespace grainlight
