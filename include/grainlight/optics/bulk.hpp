@@ -141,10 +141,10 @@ public:
             const auto q = mie.efficiencies();
             out[0] = q.qext * geo;
             out[1] = q.qsca * geo;
-            for (std::size_t i = 0; i < mu_.size(); ++i) {
-                const auto s = mie.amplitudes(mu_[i]);
-                out[2 + i] = std::norm(s.S1) + std::norm(s.S2);
-            }
+            // All angles in one call: the vectorized span overload (theta / pi - theta pairs).
+            std::vector<ScatteringAmplitudes> s(mu_.size());
+            mie.amplitudes(mu_, s);
+            for (std::size_t i = 0; i < mu_.size(); ++i) out[2 + i] = std::norm(s[i].S1) + std::norm(s[i].S2);
         } else {
             const Goa goa(m, x, model_.p_max);
             out[0] = goa.qext() * geo;
