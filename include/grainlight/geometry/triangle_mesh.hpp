@@ -40,6 +40,14 @@ struct TriangleMesh {
 
     /// Number of triangles.
     [[nodiscard]] std::size_t triangle_count() const noexcept { return triangles.size(); }
+    /// One-line description: counts and bounds.
+    [[nodiscard]] std::string to_string() const {
+        if (triangles.empty()) return "TriangleMesh[" + std::to_string(vertices.size()) + " vertices, no triangles]";
+        const auto b = bounds();
+        return "TriangleMesh[" + std::to_string(vertices.size()) + " vertices, " + std::to_string(triangles.size()) +
+               " triangles, bounds (" + grainlight::detail::to_display(b.lo.x) + ", " + grainlight::detail::to_display(b.lo.y) + ", " + grainlight::detail::to_display(b.lo.z) + ") - (" + grainlight::detail::to_display(b.hi.x) +
+               ", " + grainlight::detail::to_display(b.hi.y) + ", " + grainlight::detail::to_display(b.hi.z) + ")]";
+    }
 
     /// The three corners of triangle i.
     [[nodiscard]] std::array<Vec3<F>, 3> corners(std::size_t i) const noexcept {

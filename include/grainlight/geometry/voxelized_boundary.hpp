@@ -35,6 +35,7 @@
 #include <memory>
 #include <utility>
 #include <vector>
+#include <string>
 
 #include "grainlight/core/error.hpp"
 #include "grainlight/core/vector.hpp"
@@ -82,6 +83,11 @@ struct SphereBoundary {
     }
     /// True if p is strictly inside.
     [[nodiscard]] bool inside(const Vec3d& p) const noexcept { return glm::dot(p - center, p - center) < radius * radius; }
+    /// One-line description.
+    [[nodiscard]] std::string to_string() const {
+        return "SphereBoundary[center (" + grainlight::detail::to_display(center.x) + ", " + grainlight::detail::to_display(center.y) + ", " + grainlight::detail::to_display(center.z) + "), radius " +
+               grainlight::detail::to_display(radius) + "]";
+    }
     /// Axis-aligned bounds of the sphere.
     [[nodiscard]] Aabb<double> bounds() const noexcept { return {center - Vec3d(radius), center + Vec3d(radius)}; }
     /// Clip the ray o + t d (unit d) to the shape dilated by `margin`: narrows [t0, t1] to the
@@ -126,6 +132,11 @@ struct BoxBoundary {
     /// True if p is strictly inside.
     [[nodiscard]] bool inside(const Vec3d& p) const noexcept {
         return p.x > lo.x && p.x < hi.x && p.y > lo.y && p.y < hi.y && p.z > lo.z && p.z < hi.z;
+    }
+    /// One-line description.
+    [[nodiscard]] std::string to_string() const {
+        return "BoxBoundary[(" + grainlight::detail::to_display(lo.x) + ", " + grainlight::detail::to_display(lo.y) + ", " + grainlight::detail::to_display(lo.z) + ") - (" + grainlight::detail::to_display(hi.x) + ", " +
+               grainlight::detail::to_display(hi.y) + ", " + grainlight::detail::to_display(hi.z) + ")]";
     }
     /// The box itself.
     [[nodiscard]] Aabb<double> bounds() const noexcept { return {lo, hi}; }
@@ -242,6 +253,12 @@ public:
     }
     /// Number of triangles.
     [[nodiscard]] std::size_t triangle_count() const noexcept { return tris_.size(); }
+    /// One-line description.
+    [[nodiscard]] std::string to_string() const {
+        return "MeshBoundary[" + std::to_string(tris_.size()) + " triangles, bounds (" + grainlight::detail::to_display(bounds_.lo.x) + ", " +
+               grainlight::detail::to_display(bounds_.lo.y) + ", " + grainlight::detail::to_display(bounds_.lo.z) + ") - (" + grainlight::detail::to_display(bounds_.hi.x) + ", " + grainlight::detail::to_display(bounds_.hi.y) +
+               ", " + grainlight::detail::to_display(bounds_.hi.z) + ")]";
+    }
     /// Bytes held (triangles copy + BVH estimate).
     [[nodiscard]] std::size_t memory_bytes() const noexcept {
         return tris_.size() * sizeof(std::array<Vec3d, 3>) * 2 + bvh_->nodes().size() * sizeof(BvhNode<double>) +

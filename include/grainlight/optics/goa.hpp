@@ -44,6 +44,7 @@
 #include <span>
 #include <sstream>
 #include <vector>
+#include <string>
 
 #include <boost/math/special_functions/bessel.hpp>
 
@@ -421,6 +422,11 @@ public:
     [[nodiscard]] double alpha() const noexcept { return alpha_; }
     /// Highest ray order p included.
     [[nodiscard]] int p_max() const noexcept { return p_max_; }
+    /// One-line description: m, alpha, orders and diffraction.
+    [[nodiscard]] std::string to_string() const {
+        return "Goa[m = " + grainlight::detail::to_display(m_.real()) + " + " + grainlight::detail::to_display(m_.imag()) + "i, alpha = " + grainlight::detail::to_display(alpha_) + ", orders 0.." +
+               std::to_string(p_max_) + (diffraction_ ? ", with diffraction]" : ", no diffraction]");
+    }
 
     /// S1, S2 at scattering angle theta [rad] in [0, pi] (Eq. 11).
     [[nodiscard]] ScatteringAmplitudes amplitudes_at_angle(double theta) const {

@@ -33,6 +33,7 @@
 #include <cstddef>
 #include <span>
 #include <vector>
+#include <string>
 
 #include "grainlight/core/error.hpp"
 
@@ -210,6 +211,11 @@ public:
     [[nodiscard]] double x() const noexcept { return x_; }
     /// Number of series terms N.
     [[nodiscard]] std::size_t num_terms() const noexcept { return ab_.size() / 2; }
+    /// One-line description: m, x and the number of series terms.
+    [[nodiscard]] std::string to_string() const {
+        return "LorenzMie[m = " + grainlight::detail::to_display(m_.real()) + " + " + grainlight::detail::to_display(m_.imag()) + "i, x = " + grainlight::detail::to_display(x_) + ", " +
+               std::to_string(num_terms()) + " terms]";
+    }
     /// a_n, b_n for n = 1..N (index n-1), van de Hulst convention.
     [[nodiscard]] std::span<const std::complex<double>> a() const noexcept { return {ab_.data(), num_terms()}; }
     /// b_n for n = 1..N (index n-1), van de Hulst convention.

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <complex>
 #include <optional>
+#include <string>
 
 #include "grainlight/core/error.hpp"
 #include "grainlight/core/math.hpp"
@@ -65,6 +66,12 @@ struct ParticleModel {
     }
     /// Relative index m = particle / host.
     [[nodiscard]] std::complex<double> relative_index() const noexcept { return particle_index / host_index; }
+    /// One-line description: indices, method and GOA orders.
+    [[nodiscard]] std::string to_string() const {
+        const char* meth = method == ScatteringMethod::mie ? "mie" : method == ScatteringMethod::goa ? "goa" : "automatic";
+        return "ParticleModel[particle index " + grainlight::detail::to_display(particle_index.real()) + " + " + grainlight::detail::to_display(particle_index.imag()) +
+               "i, host index " + grainlight::detail::to_display(host_index) + ", method " + meth + ", p_max " + std::to_string(p_max) + "]";
+    }
     /// Guo21's rule alone: the method by the switch radius, without GOA's validity check (prefer
     /// method_at(radius, wavelength), which optics/bulk.hpp uses).
     [[nodiscard]] ScatteringMethod method_at(double radius_um) const noexcept {

@@ -85,6 +85,11 @@ public:
     [[nodiscard]] double number_density() const noexcept { return n0_; }
     /// Fraction of the untruncated log-normal inside [r_min, r_max].
     [[nodiscard]] double truncated_mass() const noexcept { return mass_; }
+    /// One-line description.
+    [[nodiscard]] std::string to_string() const {
+        return "LogNormalPsd[r_g = " + grainlight::detail::to_display(r_g()) + " um, sigma_g = " + grainlight::detail::to_display(sigma_g()) + ", r in [" + grainlight::detail::to_display(r_min_) +
+               ", " + grainlight::detail::to_display(r_max_) + "] um, N = " + grainlight::detail::to_display(n0_) + "]";
+    }
 
     /// Normalized density on [r_min, r_max] [1/um] (0 outside).
     [[nodiscard]] double pdf(double r) const noexcept {
@@ -157,6 +162,10 @@ public:
     [[nodiscard]] const LogNormalPsd& mode1() const noexcept { return m1_; }
     /// Mode 2 (normalized on its own).
     [[nodiscard]] const LogNormalPsd& mode2() const noexcept { return m2_; }
+    /// One-line description.
+    [[nodiscard]] std::string to_string() const {
+        return "BimodalLogNormalPsd[w1 = " + grainlight::detail::to_display(w1_) + ", " + m1_.to_string() + ", " + m2_.to_string() + "]";
+    }
     /// Normalized mixture density [1/um].
     [[nodiscard]] double pdf(double r) const noexcept { return w1_ * m1_.pdf(r) + (1 - w1_) * m2_.pdf(r); }
     /// N(r) = number_density * pdf(r) [1/(um m^3)].
@@ -207,6 +216,8 @@ public:
     [[nodiscard]] double r_max() const noexcept { return r0_; }
     /// Number density N_0 [1/m^3].
     [[nodiscard]] double number_density() const noexcept { return n0_; }
+    /// One-line description.
+    [[nodiscard]] std::string to_string() const { return "MonodispersePsd[r = " + grainlight::detail::to_display(r0_) + " um, N = " + grainlight::detail::to_display(n0_) + "]"; }
     /// Step CDF: 0 below r_0, 1 from r_0 on.
     [[nodiscard]] double cdf(double r) const noexcept { return r >= r0_ ? 1.0 : 0.0; }
     /// Always r_0.
@@ -246,6 +257,11 @@ public:
     [[nodiscard]] double r_max() const noexcept { return r_.back(); }
     /// Number density N_0 [1/m^3].
     [[nodiscard]] double number_density() const noexcept { return n0_; }
+    /// One-line description.
+    [[nodiscard]] std::string to_string() const {
+        return "TabulatedPsd[" + std::to_string(r_.size()) + " nodes, r in [" + grainlight::detail::to_display(r_.front()) + ", " + grainlight::detail::to_display(r_.back()) +
+               "] um, N = " + grainlight::detail::to_display(n0_) + "]";
+    }
     /// Normalized density [1/um] (0 outside [r_0, r_n]).
     [[nodiscard]] double pdf(double r) const noexcept {
         return (r >= r_.front() && r <= r_.back()) ? dist_.pdf(r) : 0.0;

@@ -211,6 +211,11 @@ public:
     /// Distance beyond which first_hit stops searching when t_max is infinite: a ray along a
     /// channel of a periodic packing may never hit a sphere. Default 4096 L.
     [[nodiscard]] double max_search_distance() const noexcept { return max_search_; }
+    /// One-line description: sphere count, side, radius and packing fraction.
+    [[nodiscard]] std::string to_string() const {
+        return "PeriodicTile[" + std::to_string(size()) + " spheres, side " + grainlight::detail::to_display(side_) + ", radius " +
+               grainlight::detail::to_display(radius_) + ", packing fraction " + grainlight::detail::to_display(packing_fraction()) + "]";
+    }
     /// Set max_search_distance() to d > 0 (world units); throws grainlight::invalid_argument otherwise. Not thread-safe: call before sharing the tile.
     void set_max_search_distance(double d) {
         check_argument(d > 0, "PeriodicTile::set_max_search_distance", "d", d, "> 0");

@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "grainlight/core/error.hpp"
@@ -38,6 +39,12 @@ struct Image {
     /// Channel c of pixel (x, y) (no bounds check).
     [[nodiscard]] float at(int x, int y, int c) const noexcept {
         return rgb[(std::size_t(y) * std::size_t(width) + std::size_t(x)) * 3 + std::size_t(c)];
+    }
+    /// One-line description: size and mean RGB.
+    [[nodiscard]] std::string to_string() const {
+        return "Image[" + std::to_string(width) + "x" + std::to_string(height) + ", mean (" +
+               grainlight::detail::to_display(mean(0)) + ", " + grainlight::detail::to_display(mean(1)) + ", " +
+               grainlight::detail::to_display(mean(2)) + ")]";
     }
     /// Mean of channel c over all pixels (double accumulation).
     [[nodiscard]] double mean(int c) const noexcept {
@@ -128,6 +135,13 @@ public:
         std::uint64_t n = 0;
         for (const auto c : nonfinite_) n += c;
         return n;
+    }
+    /// One-line description: size, total weight and the non-finite sample count.
+    [[nodiscard]] std::string to_string() const {
+        double w = 0;
+        for (const double c : count_) w += c;
+        return "Film[" + std::to_string(width_) + "x" + std::to_string(height_) + ", total weight " +
+               grainlight::detail::to_display(w) + ", " + std::to_string(nonfinite_samples()) + " non-finite samples]";
     }
     /// Raw RGB sums (3 per pixel, row-major), for checkpoints.
     [[nodiscard]] std::span<const double> sums() const noexcept { return sum_; }

@@ -119,6 +119,14 @@ public:
     [[nodiscard]] std::uint64_t seed() const noexcept { return seed_; }
     /// Bounding-sphere radius R of the grains (world units).
     [[nodiscard]] double grain_radius() const noexcept { return tile().radius(); }
+    /// One-line description: exemplars, grain radius, tile and boundary bounds (no grain count:
+    /// counting the grains of a large aggregate is expensive, see grain_count()).
+    [[nodiscard]] std::string to_string() const {
+        const auto b = boundary().shape().bounds();
+        return "GranularAggregate[" + std::to_string(exemplars_.size()) + " exemplar(s), grain radius " +
+               grainlight::detail::to_display(grain_radius()) + ", " + tile().to_string() + ", bounds (" + grainlight::detail::to_display(b.lo.x) + ", " + grainlight::detail::to_display(b.lo.y) +
+               ", " + grainlight::detail::to_display(b.lo.z) + ") - (" + grainlight::detail::to_display(b.hi.x) + ", " + grainlight::detail::to_display(b.hi.y) + ", " + grainlight::detail::to_display(b.hi.z) + ")]";
+    }
 
     /// Bytes used: tile (centres + query grid, estimated) + 2-bit voxels (+ the sub-voxel
     /// refinement of partial voxels and a mesh boundary's BVH) + exemplar geometry. Independent of
