@@ -3,9 +3,12 @@
 // chord, far-from-origin aggregates with the same statistics.
 #include <catch2/catch.hpp>
 
+#include <filesystem>
+
 #include <cmath>
 
 #include "grainlight/integrators/ept.hpp"
+#include "grainlight/scene/film_checkpoint.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/media/teleportation.hpp"
 #include "grainlight/packing/poisson.hpp"
@@ -161,6 +164,43 @@ TEST_CASE("EPT render: low + high order is independent of k, images independent 
     const EptImages c = render_ept(scene, agg, cam, 2, 7, 1, k10);
     REQUIRE(c.low.image().rgb == b.low.image().rgb);  // bit-identical for 1 and 2 threads
     REQUIRE(c.grain_rays == b.grain_rays);
+
+    SECTION("resumed from a checkpoint of some rows: both images bit-identical") {
+        // The checkpoint a killed render would leave after rows {1, 2, 9, 15} (rows are
+        // independent), then a resumed render of the rest.
+        const auto path = std::filesystem::temp_directory_path() / "grainlight_test_ept_resume.fckp";
+        FilmCheckpoint ck;
+        ck.seed = 7;
+        ck.spp = 2;
+        ck.key = 5;
+        ck.rows_done.assign(16, 0);
+        for (const Film* src : {&b.low, &b.high}) {
+            std::vector<double> sums(3 * 24 * 16, 0.0), weights(24 * 16, 0.0);
+            std::vector<std::uint32_t> nonfinite(24 * 16, 0u);
+            for (int y : {1, 2, 9, 15})
+                for (int x = 0; x < 24; ++x) {
+                    const std::size_t i = std::size_t(y) * 24 + std::size_t(x);
+                    for (std::size_t k = 0; k < 3; ++k) sums[3 * i + k] = src->sums()[3 * i + k];
+                    weights[i] = src->weights()[i];
+                }
+            ck.films.push_back(Film::from_accumulators(24, 16, sums, weights, nonfinite));
+        }
+        for (int y : {1, 2, 9, 15}) ck.rows_done[std::size_t(y)] = 1;
+        ck.save(path);
+        RenderOptions ro;
+        ro.spp = 2;
+        ro.seed = 7;
+        ro.threads = 2;
+        ro.checkpoint.path = path;
+        ro.checkpoint.resume = true;
+        ro.checkpoint.key = 5;
+        ro.checkpoint.interval_seconds = 0.0;
+        const EptImages r = render_ept(scene, agg, cam, ro, k10);
+        REQUIRE(r.low.image().rgb == b.low.image().rgb);
+        REQUIRE(r.high.image().rgb == b.high.image().rgb);
+        CHECK(r.grain_rays < b.grain_rays);  // the resumed rows were not traced again
+        CHECK_FALSE(std::filesystem::exists(path));  // removed when done
+    }
 }
 
 TEST_CASE("EPT grain interactions reproduce the scatterometer's g and alpha_s", "[aggregates][ept]") {

@@ -10,9 +10,9 @@ extern "C" int LLVMFuzzerInitialize(int* argc, char*** argv) {
         c.seed = 3;
         c.spp = 16;
         c.key = 0x1234;
-        c.film = Film(5, 4);
-        c.film.add_rgb(1, 2, 0.5, 0.25, 0.125);
-        c.film.add_nonfinite(3, 1);
+        c.films = {Film(5, 4)};
+        c.films[0].add_rgb(1, 2, 0.5, 0.25, 0.125);
+        c.films[0].add_nonfinite(3, 1);
         c.rows_done = {1, 0, 1, 0};
         c.save(p);
     });

@@ -153,7 +153,7 @@ TEST_CASE("A render resumed from its checkpoint is bit-identical to an uninterru
                 nonfinite[i] = reference.nonfinite_counts()[i];
             }
         }
-        ck.film = Film::from_accumulators(24, 18, sums, weights, nonfinite);
+        ck.films = {Film::from_accumulators(24, 18, sums, weights, nonfinite)};
         ck.save(path);
     }
     RenderOptions ro = opt;
@@ -175,7 +175,7 @@ TEST_CASE("A render resumed from its checkpoint is bit-identical to an uninterru
     // The last checkpoint written holds the whole finished film.
     const FilmCheckpoint last = FilmCheckpoint::load(path);
     CHECK(last.rows_finished() == 18);
-    for (std::size_t i = 0; i < reference.sums().size(); ++i) REQUIRE(last.film.sums()[i] == reference.sums()[i]);
+    for (std::size_t i = 0; i < reference.sums().size(); ++i) REQUIRE(last.films[0].sums()[i] == reference.sums()[i]);
 
     SECTION("a checkpoint of another render is refused with a message naming the mismatch") {
         RenderOptions other = ro;

@@ -17,10 +17,11 @@ FilmCheckpoint sample_checkpoint() {
     c.seed = 11;
     c.spp = 64;
     c.key = 0xfeedbeefull;
-    c.film = Film(7, 3);
-    c.film.add_rgb(0, 0, 0.1, 0.2, 0.30000000000000004);
-    c.film.add_rgb(6, 2, 1e-300, 3.5, 7.25, 2.0);
-    c.film.add_nonfinite(6, 2);
+    c.films = {Film(7, 3), Film(7, 3)};
+    c.films[0].add_rgb(0, 0, 0.1, 0.2, 0.30000000000000004);
+    c.films[0].add_rgb(6, 2, 1e-300, 3.5, 7.25, 2.0);
+    c.films[0].add_nonfinite(6, 2);
+    c.films[1].add_rgb(3, 1, 9.0, 8.0, 7.0);
     c.rows_done = {1, 0, 1};
     return c;
 }
@@ -41,13 +42,18 @@ TEST_CASE("Film checkpoints round-trip every accumulator exactly", "[film][check
     CHECK(r.key == 0xfeedbeefull);
     CHECK(r.rows_done == c.rows_done);
     CHECK(r.rows_finished() == 2);
-    REQUIRE(r.film.width() == 7);
-    REQUIRE(r.film.height() == 3);
-    for (std::size_t i = 0; i < c.film.sums().size(); ++i) CHECK(r.film.sums()[i] == c.film.sums()[i]);
-    for (std::size_t i = 0; i < c.film.weights().size(); ++i) CHECK(r.film.weights()[i] == c.film.weights()[i]);
-    CHECK(r.film.nonfinite(6, 2) == 1);
-    CHECK(r.film.nonfinite_samples() == 1);
-    CHECK(r.film.value(6, 2, 1) == 3.5);  // weight-2 sample: (2 * 3.5) / 2
+    REQUIRE(r.films.size() == 2);
+    for (std::size_t k = 0; k < 2; ++k) {
+        REQUIRE(r.films[k].width() == 7);
+        REQUIRE(r.films[k].height() == 3);
+        for (std::size_t i = 0; i < c.films[k].sums().size(); ++i) CHECK(r.films[k].sums()[i] == c.films[k].sums()[i]);
+        for (std::size_t i = 0; i < c.films[k].weights().size(); ++i)
+            CHECK(r.films[k].weights()[i] == c.films[k].weights()[i]);
+    }
+    CHECK(r.films[0].nonfinite(6, 2) == 1);
+    CHECK(r.films[0].nonfinite_samples() == 1);
+    CHECK(r.films[0].value(6, 2, 1) == 3.5);  // weight-2 sample: (2 * 3.5) / 2
+    CHECK(r.films[1].value(3, 1, 0) == 9.0);
     std::filesystem::remove(path);
 }
 
@@ -72,14 +78,18 @@ TEST_CASE("Hostile checkpoint payloads are rejected with a clear format_error", 
     const std::uint32_t z = 0;
     std::memcpy(zero.data(), &z, 4);
     CHECK_THROWS_WITH(decode(zero), Catch::Contains("outside [1, 32768]"));
+    auto films = good;
+    const std::uint32_t seventeen = 17;
+    std::memcpy(films.data() + 32, &seventeen, 4);
+    CHECK_THROWS_WITH(decode(films), Catch::Contains("film count 17"));
     // A row flag that is not 0/1.
     auto flag = good;
-    flag[8 + 24 + 1] = 7;
+    flag[8 + 24 + 4 + 1] = 7;
     CHECK_THROWS_WITH(decode(flag), Catch::Contains("row flag 7"));
     // A NaN pixel sum.
     auto nan = good;
     const double q = std::numeric_limits<double>::quiet_NaN();
-    std::memcpy(nan.data() + 8 + 24 + 3, &q, 8);
+    std::memcpy(nan.data() + 8 + 24 + 4 + 3, &q, 8);  // first sum of film 0
     CHECK_THROWS_WITH(decode(nan), Catch::Contains("non-finite pixel sum"));
     // A file of another kind.
     const auto path = scratch("wrong_kind.bin");

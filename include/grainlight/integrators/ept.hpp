@@ -573,50 +573,63 @@ struct EptImages {
     }
 };
 
-/// Render with EPT: rows over OpenMP threads, one counter-based generator per pixel sample
-/// (Pcg32::from_key(seed, pixel, sample)): bit-identical images for any thread count.
+/// Render with EPT through the row driver (integrators/render.hpp render_rows): rows over OpenMP
+/// threads, one counter-based generator per pixel sample (Pcg32::from_key(seed, pixel, sample)):
+/// bit-identical images for any thread count; `ropt` also gives the row share of this process
+/// (MPI ranks) and checkpoints / resume (both films in one checkpoint). `grain_rays` counts the
+/// traversals of the rows rendered by this call (rows taken from a checkpoint count 0).
 /// `progress(1)` is called after each row (thread-safe sink required).
+template <LitScene Scene, BoundaryShape Shape, class Camera, class Progress = NoProgress>
+[[nodiscard]] EptImages render_ept(const Scene& scene, const GranularAggregate<Shape>& agg, const Camera& camera,
+                                   const RenderOptions& ropt, const EptOptions& opt = {}, Progress&& progress = {}) {
+    check_argument(ropt.spp >= 1, "render_ept", "spp", ropt.spp, ">= 1");
+    check_argument(ropt.threads >= 0, "render_ept", "threads", ropt.threads, ">= 0");
+    check_argument(opt.low_order_max >= 0, "render_ept", "low_order_max", opt.low_order_max, ">= 0");
+    check_material_channels(agg, Scene::Spectrum::size, "render_ept");
+    using F = typename Camera::Float;
+    const int w = camera.width(), h = camera.height();
+    std::vector<std::uint64_t> row_rays(std::size_t(h), 0);
+    auto films = render_rows(
+        w, h, 2, ropt,
+        [&](int y, std::span<Film> f) {
+            for (int x = 0; x < w; ++x) {
+                const std::uint64_t pixel = std::uint64_t(y) * std::uint64_t(w) + std::uint64_t(x);
+                for (int s = 0; s < ropt.spp; ++s) {
+                    Rng rng = Rng::from_key(ropt.seed, pixel, std::uint64_t(s));
+                    const Vec2<F> u = rng.uniform2<F>();
+                    const auto ray = camera.generate_ray(F(x) + u.x, F(y) + u.y);
+                    auto L = ept_radiance(scene, agg, ray, rng, opt);
+                    if (!L.low.is_finite()) {  // counted (Film::nonfinite_samples), replaced by zero
+                        f[0].add_nonfinite(x, y);
+                        L.low = decltype(L.low)(0);
+                    }
+                    if (!L.high.is_finite()) {
+                        f[1].add_nonfinite(x, y);
+                        L.high = decltype(L.high)(0);
+                    }
+                    f[0].add_sample(x, y, L.low);
+                    f[1].add_sample(x, y, L.high);
+                    row_rays[std::size_t(y)] += L.grain_rays;
+                }
+            }
+        },
+        std::forward<Progress>(progress));
+    EptImages img{std::move(films[0]), std::move(films[1]), 0};
+    for (auto r : row_rays) img.grain_rays += r;
+    return img;
+}
+
+/// Render with EPT (spp, seed and threads given directly; see the RenderOptions overload).
 template <LitScene Scene, BoundaryShape Shape, class Camera, class Progress = NoProgress>
 [[nodiscard]] EptImages render_ept(const Scene& scene, const GranularAggregate<Shape>& agg, const Camera& camera, int spp,
                                    std::uint64_t seed, int threads = 0, const EptOptions& opt = {},
                                    Progress&& progress = {}) {
     check_argument(spp >= 1, "render_ept", "spp", spp, ">= 1");
-    check_argument(threads >= 0, "render_ept", "threads", threads, ">= 0");
-    check_argument(opt.low_order_max >= 0, "render_ept", "low_order_max", opt.low_order_max, ">= 0");
-    check_material_channels(agg, Scene::Spectrum::size, "render_ept");
-    using F = typename Camera::Float;
-    const int w = camera.width(), h = camera.height();
-    EptImages img{Film(w, h), Film(w, h), 0};
-    std::vector<std::uint64_t> row_rays(std::size_t(h), 0);
-#if defined(_OPENMP)
-    const int nt = threads > 0 ? threads : omp_get_max_threads();
-#pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
-#endif
-    for (int y = 0; y < h; ++y) {
-        for (int x = 0; x < w; ++x) {
-            const std::uint64_t pixel = std::uint64_t(y) * std::uint64_t(w) + std::uint64_t(x);
-            for (int s = 0; s < spp; ++s) {
-                Rng rng = Rng::from_key(seed, pixel, std::uint64_t(s));
-                const Vec2<F> u = rng.uniform2<F>();
-                const auto ray = camera.generate_ray(F(x) + u.x, F(y) + u.y);
-                auto L = ept_radiance(scene, agg, ray, rng, opt);
-                if (!L.low.is_finite()) {  // counted (Film::nonfinite_samples), replaced by zero
-                    img.low.add_nonfinite(x, y);
-                    L.low = decltype(L.low)(0);
-                }
-                if (!L.high.is_finite()) {
-                    img.high.add_nonfinite(x, y);
-                    L.high = decltype(L.high)(0);
-                }
-                img.low.add_sample(x, y, L.low);
-                img.high.add_sample(x, y, L.high);
-                row_rays[std::size_t(y)] += L.grain_rays;
-            }
-        }
-        progress(1);
-    }
-    for (auto r : row_rays) img.grain_rays += r;
-    return img;
+    RenderOptions ropt;
+    ropt.spp = spp;
+    ropt.seed = seed;
+    ropt.threads = threads;
+    return render_ept(scene, agg, camera, ropt, opt, std::forward<Progress>(progress));
 }
 
 }  // namespace grainlight
