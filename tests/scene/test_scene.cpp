@@ -233,3 +233,52 @@ TEST_CASE("Scene validates medium indices and reports nested media on hits", "[s
     using Mat = Material<double, RGBd>;
     CHECK_THROWS_AS(Mat::diffuse(RGBd(1.5)), grainlight::invalid_argument);
 }
+
+#include "grainlight/integrators/walk.hpp"
+#include "grainlight/media/continuous.hpp"
+#include "grainlight/phase/henyey_greenstein.hpp"
+#include "grainlight/scene/unbounded_medium.hpp"
+
+TEST_CASE("Unbounded medium scene: photon walks match the infinite-medium closed forms", "[scene][unbounded]") {
+    // In an infinite medium of albedo a every photon is eventually absorbed after a geometric
+    // number of scatterings: E[scatterings] = a / (1 - a); the first free flight has mean 1/sigma_t.
+    using Grey = grainlight::Spectrum<1, double>;
+    using HG = grainlight::HenyeyGreenstein<double, Grey>;
+    using M = grainlight::ContinuousMedium<HG, Grey>;
+    const double sigma_t = 2.5, a = 0.8;
+    const M medium(Grey(sigma_t), Grey(a), HG(0.4));
+    const grainlight::UnboundedMediumScene<M> scene(medium);
+    static_assert(grainlight::WalkScene<grainlight::UnboundedMediumScene<M>>);
+    struct Count {
+        long scatters = 0;
+        double first = -1;
+        grainlight::Vec3d start{0.0};
+        bool on_scatter(grainlight::PathState<double, Grey>& st, const grainlight::Interaction<double, Grey>& it, const M&) {
+            if (first < 0) first = glm::length(it.p - start);
+            ++scatters;
+            (void)st;
+            return true;
+        }
+    };
+    const int n = 40000;
+    double scat = 0, scat2 = 0, flight = 0;
+    grainlight::WalkOptions<double> wo;
+    wo.mode = grainlight::TransportMode::importance;
+    for (int i = 0; i < n; ++i) {
+        grainlight::Rng rng = grainlight::Rng::from_key(11, std::uint64_t(i));
+        auto st = grainlight::start_path(grainlight::Ray<double>(grainlight::Vec3d(0.0), grainlight::Vec3d(0, 0, 1)), 0,
+                                         Grey(1.0));
+        Count c;
+        const auto end = grainlight::walk(scene, st, rng, c, wo);
+        REQUIRE(end == grainlight::WalkEnd::absorbed);
+        scat += double(c.scatters);
+        scat2 += double(c.scatters) * double(c.scatters);
+        flight += c.first >= 0 ? c.first : 0.0;
+    }
+    const double mean = scat / n, var = scat2 / n - mean * mean;
+    INFO("mean scatterings " << mean << " vs " << a / (1 - a) << ", mean first flight " << flight / n);
+    CHECK(std::abs(mean - a / (1 - a)) < 4 * std::sqrt(var / n));
+    // First flight (to the first scattering, a fraction a of the photons; absorbed ones count 0):
+    // E = a / sigma_t, standard error below 1 / (sigma_t sqrt(n)).
+    CHECK(std::abs(flight / n - a / sigma_t) < 4.0 / (sigma_t * std::sqrt(double(n))));
+}
