@@ -273,6 +273,15 @@ public:
     [[nodiscard]] const std::vector<Box>& boxes() const noexcept { return boxes_; }
     [[nodiscard]] std::size_t volume_sample_count() const noexcept { return tree_.items().size(); }
     [[nodiscard]] F volume_step() const noexcept { return step_; }
+    /// Memory held by the light samples (Table 3's "mem." without the table): the items and
+    /// nodes of the volume, bounce-surface and secondary trees, the volume samples' boxes and
+    /// density factors, in bytes.
+    [[nodiscard]] std::size_t bytes() const noexcept {
+        auto tb = [](const Octree<F, S>& t) {
+            return t.items().size() * sizeof(Item) + t.nodes().size() * sizeof(typename Octree<F, S>::Node);
+        };
+        return tb(tree_) + tb(surf_tree_) + tb(sec_tree_) + boxes_.size() * sizeof(Box) + k_.size() * sizeof(F);
+    }
     /// Switch the boundary image of the multiple term (PointBasedOptions::ms_boundary_image) after
     /// construction, for studies that compare both on the same light samples (the bounce samples
     /// keep the light they gathered at construction).
