@@ -100,6 +100,9 @@ struct Settings {
     int W = 32, pb_spp = 4, vpt_spp = 64, surface = 12000, bounce = 512, k_max = 6;
     int max_cells = 128;  ///< cap on the table's radial cells (axial: twice)
     float table_range = 10;  ///< table extent in mean free paths (0: automatic)
+    bool ms_image = false;   ///< boundary image of the multiple term (PointBasedOptions::ms_boundary_image)
+    float ms_image_offset = 0;  ///< its offset in transport mean free paths
+    int vpt_max_depth = 0;   ///< VPT path cap in events (0: none; the paper's UPBP: 50)
     float eps1 = 1.0f, R_opt = 20.0f;
     gl::MsTableOptions table;
 };
@@ -191,10 +194,13 @@ Result run_material(const Material& mat, const Settings& st, std::uint64_t seed,
     po.bounce_samples = st.bounce;
     po.bounce_rays = 4;
     po.bounce_k_max = 3;
+    po.ms_boundary_image = st.ms_image;
+    po.ms_image_offset = st.ms_image_offset;
     c0 = cpu_seconds();
     gl::Rng lrng = gl::Rng::from_key(seed, 0x5742u);
     const Renderer pb(medium, eta, sphere, gl::sphere_surface_samples(sphere, st.surface),
-                      gl::Light<float, gl::RGB>::quad_light(quad, gl::RGB(Le)), po, lrng, &table);
+                      gl::Light<float, gl::RGB>::quad_light(quad, gl::RGB(Le)), po, lrng, &table,
+                      gl::sphere_surface_samples(sphere, po.bounce_samples));
     r.seconds_samples = cpu_seconds() - c0;
     r.volume_samples = pb.volume_sample_count();
     r.samples_mb = double(pb.bytes()) / 1e6;
@@ -204,6 +210,12 @@ Result run_material(const Material& mat, const Settings& st, std::uint64_t seed,
     // on the even strata, one on the odd): their difference gives the point-based noise.
     std::vector<double> pbh(2 * npx * 3, 0.0);
     const int side = std::max(1, int(std::lround(std::sqrt(double(st.pb_spp)))));
+    // Checkerboard over the side x side strata (each half stratified); ray parity with one stratum.
+    auto half_of = [side](int s) {
+        if (side < 2) return s % 2;
+        const int cell = s % (side * side);
+        return (cell % side + cell / side) % 2;
+    };
     c0 = cpu_seconds();
     {
         gl_examples::ProgressBar bar(std::string("wang18 ") + mat.key + " point-based", std::uint64_t(H));
@@ -219,7 +231,7 @@ Result run_material(const Material& mat, const Settings& st, std::uint64_t seed,
                     const int cell = s % (side * side);
                     const float fx = (float(cell % side) + u.x) / float(side), fy = (float(cell / side) + u.y) / float(side);
                     const gl::RGB L = pb.radiance(camera.generate_ray(float(x) + fx, float(y) + fy), rng);
-                    const int h = (cell + (cell / side)) % 2;  // checkerboard strata: two halves
+                    const int h = half_of(s);
                     for (int ch = 0; ch < 3; ++ch) pbh[(std::size_t(h) * npx + p) * 3 + std::size_t(ch)] += L[ch];
                 }
             }
@@ -228,12 +240,9 @@ Result run_material(const Material& mat, const Settings& st, std::uint64_t seed,
         bar.done();
     }
     r.seconds_pb = cpu_seconds() - c0;
-    // Rays per half (a checkerboard over side x side strata, the rest of pb_spp cycling over it).
+    // Rays per half.
     std::array<int, 2> nh{0, 0};
-    for (int s = 0; s < st.pb_spp; ++s) {
-        const int cell = s % (side * side);
-        ++nh[std::size_t((cell + cell / side) % 2)];
-    }
+    for (int s = 0; s < st.pb_spp; ++s) ++nh[std::size_t(half_of(s))];
     gl::Image pbi(W, H);
     double pb_noise = 0;
     for (std::size_t p = 0; p < npx; ++p)
@@ -258,7 +267,8 @@ Result run_material(const Material& mat, const Settings& st, std::uint64_t seed,
     }
     std::vector<double> bs(std::size_t(kBatches) * npx * 3, 0.0);
     std::vector<double> events(std::size_t(H), 0.0);
-    const gl::WalkOptions<float> wo;  // no max_depth cap; Russian roulette after 5 events
+    gl::WalkOptions<float> wo;  // no max_depth cap (unless --vpt-max-depth); Russian roulette after 5 events
+    if (st.vpt_max_depth > 0) wo.max_depth = st.vpt_max_depth;
     c0 = cpu_seconds();
     {
         gl_examples::ProgressBar bar(std::string("wang18 ") + mat.key + " VPT reference", std::uint64_t(H));
@@ -345,6 +355,18 @@ Result run_material(const Material& mat, const Settings& st, std::uint64_t seed,
     const double t_ref = r.var_ps / r.e2 * (r.seconds_vpt / double(st.vpt_spp));
     r.speedup = t_ref / (r.seconds_samples + r.seconds_pb);
 
+    // Vertical profile (row means over the three channels): where the per-pixel bias sits.
+    gl_examples::Csv prof({"row", "point_based", "vpt"});
+    for (int y = 0; y < H; ++y) {
+        double a = 0, b = 0;
+        for (int x = 0; x < W; ++x)
+            for (int ch = 0; ch < 3; ++ch) {
+                a += pbi.at(x, y, ch) / (3.0 * W);
+                b += refi.at(x, y, ch) / (3.0 * W);
+            }
+        prof.row_text({std::to_string(y), std::to_string(a), std::to_string(b)});
+    }
+    prof.write(out / (std::string("wang18_table3_") + mat.key + "_profile.csv"));
     const double scale = 1.0 / std::max(1e-6, 4.0 * r.ref_mean);
     gl::write_exr(out / (std::string("wang18_table3_") + mat.key + "_point_based.exr"), pbi);
     gl::write_png(out / (std::string("wang18_table3_") + mat.key + "_point_based.png"), pbi, {scale});
@@ -363,13 +385,16 @@ int main(int argc, char** argv) {
             Settings st;
             const std::string mats = ex.opt<std::string>("materials", "oil,wax,milk,bmps", "comma-separated subset of oil,wax,milk,bmps");
             st.W = ex.opt<int>("width", 32, 64, "image width and height in pixels");
-            st.pb_spp = ex.opt<int>("pb-spp", 4, 16, "point-based camera rays per pixel (stratified; >= 2)");
+            st.pb_spp = ex.opt<int>("pb-spp", 4, 4, "point-based camera rays per pixel (stratified; >= 2)");
             st.vpt_spp = ex.opt<int>("vpt-spp", 64, 1024, "VPT samples per pixel and channel (multiple of 8)");
-            st.surface = ex.opt<int>("surface-samples", 12000, 40000, "light surface samples on the sphere");
-            st.bounce = ex.opt<int>("bounce-samples", 512, 2048, "bounce surface samples (Eq. 8)");
-            st.k_max = ex.opt<int>("k-max", 6, 8, "camera samples per inside segment (Eq. 10)");
-            st.eps1 = ex.opt<float>("eps1", 1.0f, 0.2f, "Alg. 1 solid-angle threshold eps1 (sr; eps2 = eps1 / 5)");
+            st.surface = ex.opt<int>("surface-samples", 12000, 20000, "light surface samples on the sphere");
+            st.bounce = ex.opt<int>("bounce-samples", 512, 1024, "bounce surface samples (Eq. 8)");
+            st.k_max = ex.opt<int>("k-max", 6, 6, "camera samples per inside segment (Eq. 10)");
+            st.eps1 = ex.opt<float>("eps1", 1.0f, 0.5f, "Alg. 1 solid-angle threshold eps1 (sr; eps2 = eps1 / 5)");
             const int photons = ex.opt<int>("table-photons", 200000, 2000000, "particles of each MS table");
+            st.ms_image = ex.opt<bool>("ms-image", false, "boundary image of the multiple-scattering term (method of images)");
+            st.ms_image_offset = ex.opt<float>("ms-image-offset", 0.0f, "image plane offset in transport mean free paths");
+            st.vpt_max_depth = ex.opt<int>("vpt-max-depth", 0, "cap the VPT paths at this many events (0: none; the paper's UPBP reference: 50)");
             st.table_range = ex.opt<float>("table-range", 10.0f, "MS table extent +-range in mean free paths (0: 5 diffusion lengths, at most the sphere)");
             ex.ready();
             if (st.pb_spp < 2 || st.pb_spp > 4096)
