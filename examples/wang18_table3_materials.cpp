@@ -493,7 +493,8 @@ int main(int argc, char** argv) {
                 flat.push_back({std::string(m->key) + "_seconds_vpt", r.seconds_vpt});
                 flat.push_back({std::string(m->key) + "_memory_mb", mem});
             }
-            ex.csv("wang18_table3_materials.csv", csv);
+            const auto csv_path = ex.csv("wang18_table3_materials.csv", csv);
+            ex.plot("wang18_table3_materials", csv_path, ex.out() / "wang18_table3_materials.png");
             auto j = ex.summary();
             j.integer("pb_spp", st.pb_spp).integer("vpt_spp", st.vpt_spp).integer("width", st.W);
             j.raw("materials", jm.str());
