@@ -65,6 +65,7 @@ const char* const kCompName[kComp] = {"single", "double", "multiple", "bounced",
 constexpr int kBatches = 8;
 
 double g_eps1 = 0;  // Alg. 1 solid-angle threshold (--eps1; 0: the quality default)
+int g_bounce_samples = 0;  // bounce surface samples (--bounce-samples; 0: the quality default)
 
 double cpu_seconds() {
     timespec ts{};
@@ -137,7 +138,7 @@ CaseResult run_case(const Case& cs, const gl::MsTable<3>& table, bool full, int 
     po.cut.eps1 = g_eps1 > 0 ? float(g_eps1) : (full ? 0.2f : 1.0f);
     po.cut.eps2 = 0.2f * po.cut.eps1;
     po.two_step_depth = 3;
-    po.bounce_samples = full ? 4096 : 512;
+    po.bounce_samples = g_bounce_samples > 0 ? g_bounce_samples : (full ? 4096 : 512);
     po.bounce_rays = full ? 8 : 4;
     po.bounce_k_max = full ? 6 : 3;
     po.bounce_generations = bounce_generations;
@@ -145,7 +146,8 @@ CaseResult run_case(const Case& cs, const gl::MsTable<3>& table, bool full, int 
     gl::Rng lrng = gl::Rng::from_key(seed, 0x5742u);
     const int n_surf = thick && !full ? 2 * n_surface : n_surface;
     Renderer pb(medium, eta, sphere, gl::sphere_surface_samples(sphere, n_surf),
-                gl::Light<float, gl::RGB>::quad_light(quad, gl::RGB(Le)), po, lrng, &table);
+                gl::Light<float, gl::RGB>::quad_light(quad, gl::RGB(Le)), po, lrng, &table,
+                gl::sphere_surface_samples(sphere, po.bounce_samples));
     res.cpu_samples = cpu_seconds() - c0;
     res.volume_samples = pb.volume_sample_count();
     res.bounce_ratio = pb.bounce_ratio()[1];
@@ -341,6 +343,7 @@ int main(int argc, char** argv) {
             .option("vpt-spp", "VPT samples per pixel and channel, multiple of 8 (default: 512 quick, 4096 full)")
             .option("surface-samples", "light surface samples on the sphere (default: 6000 quick, 20000 full; the thick case uses twice as many at quick)")
             .option("eps1", "Alg. 1 solid-angle threshold eps1 in sr (default 1.0 quick, 0.2 full; eps2 = eps1 / 5)")
+            .option("bounce-samples", "bounce surface samples of Eq. 8, their own Fibonacci lattice (default 512 quick, 4096 full)")
             .option("bounce-generations", "reflections carried by the bounced term: 1 (Eq. 8 as in the paper) or 2 (default)")
             .option("bias-study", "flag: the multiple-scattering bias study (optical radius 2, 5, 20, 50), docs/wang18.md");
         cli.finish();
@@ -359,6 +362,8 @@ int main(int argc, char** argv) {
         g_eps1 = cli.num("eps1", 0.0);
         if (g_eps1 < 0 || g_eps1 > 10) throw gl_examples::cli_error("--eps1 must be in (0, 10]");
         const int bounce_generations = int(cli.integer("bounce-generations", 2));
+        g_bounce_samples = int(cli.integer("bounce-samples", 0));
+        if (g_bounce_samples > 1000000) throw gl_examples::cli_error("--bounce-samples must be <= 1000000");
         if (bounce_generations < 1 || bounce_generations > 2) throw gl_examples::cli_error("--bounce-generations must be 1 or 2");
 
         // One table for both cases (it is in units of the mean free path): built once, cached on

@@ -1,0 +1,83 @@
+// Quadtree compression of the multiple-scattering table (integrators/ms_table_quadtree.hpp): the
+// compressed table must give back the dense one (lossless at tolerance 0, within the tolerance
+// otherwise), hold less memory when the grid has empty regions, and reject bad input.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdio>
+
+#include "grainlight/integrators/ms_table_quadtree.hpp"
+#include "grainlight/phase/henyey_greenstein.hpp"
+#include "grainlight/precompute/ms_table.hpp"
+
+using namespace grainlight;
+
+namespace {
+using Grey = Spectrum<1, float>;
+using RGBPhase = HenyeyGreenstein<float, RGB>;
+
+MsTable<3> sparse_table() {
+    // Few particles over a grid much wider than they reach: the far cells stay empty.
+    MsTableOptions t;
+    t.n_rho = 24;
+    t.n_z = 40;
+    t.n_theta = 4;
+    t.n_phi = 2;
+    t.rho_max = 24;
+    t.z_min = -24;
+    t.z_max = 24;
+    t.photons = 3000;
+    t.seed = 7;
+    return MsTable<3>::build(RGBPhase(0.7f), RGB{0.9f, 0.6f, 0.4f}, t);
+}
+}  // namespace
+
+TEST_CASE("ms_table_quadtree: lossless at tolerance 0, smaller than the dense table", "[ms_quadtree]") {
+    const MsTable<3> t = sparse_table();
+    const MsTableQuadtree<3> q(t, 0.0);
+    const auto& g = t.grid();
+    std::size_t empty_cells = 0, mismatches = 0;
+    for (std::size_t iz = 0; iz < g.n_z; ++iz)
+        for (std::size_t ir = 0; ir < g.n_rho; ++ir) {
+            bool any = false;
+            for (std::size_t c = 0; c < 3; ++c)
+                for (std::size_t j = 0; j < g.directions(); ++j) {
+                    const float d = t.values()[t.value_index(c, iz, ir, j)];
+                    any = any || d > 0.0f;
+                    if (q.value(c, iz, ir, j) != d) ++mismatches;
+                }
+            if (!any) ++empty_cells;
+        }
+    std::printf("ms_quadtree: %zu of %zu cells empty; dense %zu B, quadtree %zu B (%zu cells stored)\n", empty_cells,
+                std::size_t(g.n_z) * g.n_rho, t.bytes(), q.bytes(), q.stored_cells());
+    CHECK(mismatches == 0);
+    REQUIRE(empty_cells > 0);
+    CHECK(q.stored_cells() == std::size_t(g.n_z) * g.n_rho - empty_cells);
+    CHECK(q.bytes() < t.bytes());
+    CHECK(q.value(0, g.n_z, 0, 0) == 0.0f);  // outside the grid
+}
+
+TEST_CASE("ms_table_quadtree: lossy tolerance drops only cells below it", "[ms_quadtree]") {
+    const MsTable<3> t = sparse_table();
+    const MsTableQuadtree<3> q0(t, 0.0), q(t, 1e-3);
+    const auto& g = t.grid();
+    std::size_t bad = 0;
+    for (std::size_t c = 0; c < 3; ++c)
+        for (std::size_t iz = 0; iz < g.n_z; ++iz)
+            for (std::size_t ir = 0; ir < g.n_rho; ++ir)
+                for (std::size_t j = 0; j < g.directions(); ++j) {
+                    const float d = t.values()[t.value_index(c, iz, ir, j)], v = q.value(c, iz, ir, j);
+                    // Either kept exactly, or the whole cell was dropped and this value is below the threshold.
+                    if (!(v == d || (v == 0.0f && d <= q.threshold()))) ++bad;
+                }
+    CHECK(bad == 0);
+    CHECK(q.threshold() > 0.0f);
+    CHECK(q.bytes() <= q0.bytes());
+}
+
+TEST_CASE("ms_table_quadtree: bad input", "[ms_quadtree]") {
+    const MsTable<3> t = sparse_table();
+    CHECK_THROWS_AS(MsTableQuadtree<3>(t, -0.1), std::invalid_argument);
+    CHECK_THROWS_AS(MsTableQuadtree<3>(t, std::nan("")), std::invalid_argument);
+    CHECK_THROWS_AS(MsTableQuadtree<3>(MsTable<3>{}, 0.0), std::invalid_argument);
+}
