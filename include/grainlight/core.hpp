@@ -7,6 +7,7 @@
 #include "grainlight/core/error.hpp"
 #include "grainlight/core/frame.hpp"
 #include "grainlight/core/math.hpp"
+#include "grainlight/core/parallel.hpp"
 #include "grainlight/core/quadrature.hpp"
 #include "grainlight/core/ray.hpp"
 #include "grainlight/core/rng.hpp"

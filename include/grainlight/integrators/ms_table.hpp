@@ -40,12 +40,11 @@
 #include "grainlight/core/math.hpp"
 #include "grainlight/core/spectrum.hpp"
 #include "grainlight/core/vector.hpp"
+#include "grainlight/scene/unbounded_medium.hpp"
 
 namespace grainlight {
 
 struct MsTableOptions;
-template <class M>
-struct InfiniteMediumScene;  // precompute/ms_table.hpp
 
 /// Grid of an MsTable: cylindrical cells (rho, z) in mean free paths times direction bins.
 struct MsTableGrid {
@@ -82,9 +81,9 @@ public:
     static constexpr std::uint32_t file_kind = std::uint32_t('M') | (std::uint32_t('S') << 8) |
                                                (std::uint32_t('T') << 16) | (std::uint32_t('B') << 24);
     /// Deprecated (one release): the infinite-medium walk scene is now
-    /// grainlight::InfiniteMediumScene (precompute/ms_table.hpp).
+    /// grainlight::UnboundedMediumScene (scene/unbounded_medium.hpp).
     template <class M>
-    using InfiniteMediumScene = grainlight::InfiniteMediumScene<M>;
+    using InfiniteMediumScene = grainlight::UnboundedMediumScene<M>;
 
     MsTable() = default;
 

@@ -38,6 +38,7 @@
 #include "grainlight/core/spectrum.hpp"
 #include "grainlight/integrators/ms_table.hpp"
 #include "grainlight/integrators/walk.hpp"
+#include "grainlight/scene/unbounded_medium.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/core/serialization.hpp"
 #include "grainlight/scene/concepts.hpp"
@@ -63,16 +64,10 @@ struct MsTableOptions {
 inline constexpr std::uint32_t ms_table_file_kind = fourcc("MSTB");
 static_assert(ms_table_file_kind == MsTable<1>::file_kind, "MsTable::file_kind must match the container kind");
 
-/// An infinite homogeneous medium as a WalkScene (no surfaces, everything in medium 0).
+/// An infinite homogeneous medium as a WalkScene: the library's one unbounded-medium scene
+/// (scene/unbounded_medium.hpp). Kept under this name for one release.
 template <class M>
-struct InfiniteMediumScene {
-    using Medium = M;
-    using Float = typename M::Float;
-    using Spectrum = typename M::Spectrum;
-    const M& m;
-    [[nodiscard]] SurfaceHit<Float, Spectrum> intersect(const Ray<Float>&) const noexcept { return {}; }
-    [[nodiscard]] const M& medium(int) const noexcept { return m; }
-};
+using InfiniteMediumScene = UnboundedMediumScene<M>;
 
 namespace detail {
 /// Walk callbacks of the table builder: histogram scattering events of order >= 2 by cell and
