@@ -48,9 +48,18 @@
 /// ept_radiance with the same generator (each path of a bundle has its own counter-based
 /// generator Pcg32::from_key(seed, pixel, bundle * N + i), as render_ept's sample index).
 ///
+/// Techniques (Meng15 Fig. 11): HybridMode ept, ept_vpt, ept_vpt_da, and the grain-free vpt and
+/// vpt_da (camera paths enter the effective medium directly: hybrid_vpt_camera_path). Films
+/// (Fig. 12): HybridImages::ept_image / vpt_image / da_image (what each technique gathered) and
+/// switch_depth.
+///
 /// Distance to the boundary: any callable double(const Vec3d&) returning the distance (or a
-/// lower bound) from an interior point to the boundary surface; `BoundaryDistance<Shape>`
-/// provides it for SphereBoundary, BoxBoundary and the half-space used in tests.
+/// lower bound) from an interior point to the boundary surface; the DA switch asks
+/// `ball_inside(distance, x, d_DA)` (geometry/distance.hpp), which uses a member
+/// `ball_inside(x, r)` when the callable has one. `BoundaryDistance<Shape>` covers
+/// SphereBoundary, BoxBoundary and the half-space used in tests; `add_mesh_boundary` makes any
+/// closed triangle mesh (an OBJ) the boundary: the mesh goes into scene_vpt and its MeshDistance
+/// (exact nearest point through a box tree, early-exit ball query) drives the switch.
 ///
 /// Kernel rules: no allocation, no exceptions, no virtual calls; randomness only from the paths'
 /// generators. The clock is read only when HybridOptions::measure_time is set.
@@ -74,6 +83,8 @@
 #include "grainlight/core/warp.hpp"
 #include "grainlight/diffusion/improved.hpp"
 #include "grainlight/diffusion/multipole.hpp"
+#include "grainlight/geometry/distance.hpp"
+#include "grainlight/geometry/triangle_mesh.hpp"
 #include "grainlight/integrators/ept.hpp"
 #include "grainlight/integrators/render.hpp"
 #include "grainlight/integrators/vpt.hpp"
@@ -81,6 +92,8 @@
 #include "grainlight/media/teleportation.hpp"
 #include "grainlight/scene/concepts.hpp"
 #include "grainlight/scene/film.hpp"
+#include "grainlight/scene/scene.hpp"
+#include "grainlight/scene/shapes.hpp"
 #include "grainlight/traversal/aggregate.hpp"
 
 #if defined(_OPENMP)
@@ -145,12 +158,34 @@ struct NoBoundaryDistance {
 // Options, diffusion parameters, Eq. 8
 // ---------------------------------------------------------------------------------------------
 
-/// Which techniques a hybrid render uses.
+/// Which techniques a hybrid render uses: the five combinations of Meng15 Fig. 11.
 enum class HybridMode : std::uint8_t {
     ept,         ///< EPT only (the criterion only splits low/high order)
     ept_vpt,     ///< EPT -> VPT
-    ept_vpt_da   ///< EPT -> VPT -> DA
+    ept_vpt_da,  ///< EPT -> VPT -> DA
+    vpt,         ///< VPT only: camera paths enter the effective medium directly (no grains)
+    vpt_da       ///< VPT -> DA (no grains)
 };
+
+/// The mode switches to diffusion deep inside.
+[[nodiscard]] constexpr bool hybrid_uses_da(HybridMode m) noexcept {
+    return m == HybridMode::ept_vpt_da || m == HybridMode::vpt_da;
+}
+/// The mode traces camera paths through the explicit grains first.
+[[nodiscard]] constexpr bool hybrid_uses_ept(HybridMode m) noexcept {
+    return m == HybridMode::ept || m == HybridMode::ept_vpt || m == HybridMode::ept_vpt_da;
+}
+/// Fig. 11's label of a mode: "EPT", "EPT+VPT", "EPT+VPT+DA", "VPT", "VPT+DA".
+[[nodiscard]] inline const char* hybrid_mode_name(HybridMode m) noexcept {
+    switch (m) {
+        case HybridMode::ept: return "EPT";
+        case HybridMode::ept_vpt: return "EPT+VPT";
+        case HybridMode::ept_vpt_da: return "EPT+VPT+DA";
+        case HybridMode::vpt: return "VPT";
+        case HybridMode::vpt_da: return "VPT+DA";
+    }
+    return "?";
+}
 
 /// Options of the hybrid integrator (defaults: Meng15 Sec. 5).
 struct HybridOptions {
@@ -239,6 +274,27 @@ struct HybridContext {
     const HybridDiffusion* diffusion = nullptr;  ///< required for HybridMode::ept_vpt_da
 };
 
+/// A closed triangle mesh (e.g. load_obj) as the aggregate boundary of the hybrid: adds the mesh
+/// to `scene_vpt` as the index-matched surface enclosing the effective medium `medium` and
+/// returns the context whose distance is the mesh's own distance tree (MeshDistance: the VPT ->
+/// DA switch asks `ball_inside(x, d_DA)`, i.e. "no triangle within d_DA and x inside", Meng15
+/// Sec. 5's kD-tree search). The aggregate is `GranularAggregate<MeshBoundary>` over the same
+/// mesh in the same frame (anchor tile 0). Throws grainlight::invalid_argument for a mesh that
+/// is not closed and outward-oriented (MeshDistance / MeshBoundary checks) or a bad medium.
+template <class SceneT, std::floating_point F>
+[[nodiscard]] HybridContext<MeshDistance> add_mesh_boundary(SceneT& scene_vpt, const TriangleMesh<F>& mesh, int medium,
+                                                            const HybridDiffusion* diffusion = nullptr) {
+    using SF = typename SceneT::Float;
+    MeshDistance dist(mesh);
+    TriangleMesh<SF> m;
+    m.vertices.reserve(mesh.vertices.size());
+    for (const auto& v : mesh.vertices) m.vertices.emplace_back(Vec3<SF>(v));
+    m.triangles = mesh.triangles;
+    m.compute_face_normals();
+    const int shape = scene_vpt.add_shape(MeshShape<SF>(m), SceneT::MaterialT::index_matched(), medium, -1);
+    return HybridContext<MeshDistance>{medium, shape, std::move(dist), diffusion};
+}
+
 /// Counters of a path / bundle.
 struct HybridCounters {
     std::uint64_t paths = 0;         ///< camera paths
@@ -280,7 +336,7 @@ struct HybridVptCallbacks {
     bool on_scatter(PathState<F, S>& st, const Interaction<F, S>& it, const M& m) noexcept {
         if (da_enabled && st.medium == ctx.medium) {
             const Vec3d x(it.p);
-            if (ctx.distance(x) >= ctx.diffusion->d_DA) {
+            if (ball_inside(ctx.distance, x, ctx.diffusion->d_DA)) {
                 da_pending = true;
                 da_x = x;
                 return false;
@@ -339,54 +395,27 @@ template <LitScene Scene, class Distance>
     return true;
 }
 
-/// The high-order part of a path after the switch: from the grain hit x (direction of arrival d,
-/// throughput beta) in the effective medium `ctx.medium` of `scene_vpt`: the grain interaction
-/// becomes a scattering event of the effective medium (albedo, NEE, phase sampling), then VPT,
-/// and (HybridMode::ept_vpt_da) DA connections deep inside. Returns the radiance; counts DA
-/// connections in `counters`.
+namespace detail {
+
+/// The VPT walk of `st` with DA restarts (HybridVptCallbacks): walks while `walk_on`, and at
+/// every pending DA vertex makes a diffusion connection (sample_diffusion_connection), gathers
+/// at the boundary point like a white Lambertian vertex and walks on out of the medium.
+/// Returns the radiance; `*da_part` (if given) receives the part gathered after the first DA
+/// connection (Meng15 Fig. 12's DA contribution).
 template <LitScene Scene, class Distance>
     requires PhaseMedium<typename Scene::Medium>
-[[nodiscard]] typename Scene::Spectrum hybrid_vpt_continuation(const Scene& scene_vpt, const HybridContext<Distance>& ctx,
-                                                               const Vec3d& x, const Vec3d& d,
-                                                               const typename Scene::Spectrum& beta, Rng& rng,
-                                                               const HybridOptions& opt,
-                                                               HybridCounters* counters = nullptr) noexcept {
+[[nodiscard]] typename Scene::Spectrum hybrid_walk_with_da(const Scene& scene_vpt, const HybridContext<Distance>& ctx,
+                                                           HybridVptCallbacks<Scene, Distance>& cb,
+                                                           PathState<typename Scene::Float, typename Scene::Spectrum>& st,
+                                                           bool walk_on, Rng& rng, const HybridOptions& opt,
+                                                           const WalkOptions<typename Scene::Float>& wopt,
+                                                           HybridCounters* counters,
+                                                           typename Scene::Spectrum* da_part) noexcept {
     using F = typename Scene::Float;
     using S = typename Scene::Spectrum;
-    using M = typename Scene::Medium;
     constexpr F inf = std::numeric_limits<F>::infinity();
-    const M& m = scene_vpt.medium(ctx.medium);
-    detail::HybridVptCallbacks<Scene, Distance> cb{VptCallbacks<Scene>{scene_vpt, rng, opt.vpt}, ctx};
-    cb.da_enabled = opt.mode == HybridMode::ept_vpt_da && ctx.diffusion != nullptr;
-    WalkOptions<F> wopt;
-    wopt.max_depth = opt.vpt.max_depth;
-    wopt.rr_depth = opt.vpt.rr_depth;
-    wopt.mode = TransportMode::radiance;
-
-    PathState<F, S> st = start_path<F, S>(Ray<F>(Vec3<F>(x), Vec3<F>(d)), ctx.medium, beta);
-    if constexpr (requires { m.albedo(); }) st.throughput *= m.albedo();
-    Interaction<F, S> it;
-    it.kind = EventKind::scatter;
-    it.p = Vec3<F>(x);
-    it.nee = NeeKind::phase;
-    st.depth = 1;
-    bool walk_on = true;
-    if (cb.da_enabled && ctx.distance(x) >= ctx.diffusion->d_DA) {  // test in double precision
-        cb.da_pending = true;
-        cb.da_x = x;
-        walk_on = false;
-    } else {
-        walk_on = cb.on_scatter(st, it, m);
-    }
-    if (walk_on) {
-        const auto ps = m.phase().sample(Vec3<F>(d), rng.uniform2<F>());
-        if (!ps) return cb.vpt.L;
-        st.throughput *= ps.weight;
-        st.ray = Ray<F>(Vec3<F>(x), ps.w, inf, st.ray.cone);
-        st.specular = false;
-        st.last_pdf = ps.pdf;
-        st.last_p = Vec3<F>(x);
-    }
+    bool any_da = false;
+    S before_da(F(0));
     for (int restarts = 0;; ++restarts) {
         if (walk_on) {
             const WalkEnd e = walk(scene_vpt, st, rng, cb, wopt);
@@ -396,6 +425,10 @@ template <LitScene Scene, class Distance>
         if (!cb.da_pending || restarts >= opt.max_da_restarts) break;
         cb.da_pending = false;
         if (counters) ++counters->da;
+        if (!any_da) {
+            any_da = true;
+            before_da = cb.vpt.L;
+        }
         // DA: move to a boundary point with the diffusion weight, gather there as a white
         // Lambertian vertex (NEE + MIS), leave the medium along a cosine-sampled direction.
         SurfaceHit<F, S> h;
@@ -420,7 +453,86 @@ template <LitScene Scene, class Distance>
         st.last_p = h.p;
         if (++st.depth > wopt.max_depth) break;
     }
+    if (da_part) *da_part = any_da ? S(cb.vpt.L - before_da) : S(F(0));
     return cb.vpt.L;
+}
+
+}  // namespace detail
+
+/// The high-order part of a path after the switch: from the grain hit x (direction of arrival d,
+/// throughput beta) in the effective medium `ctx.medium` of `scene_vpt`: the grain interaction
+/// becomes a scattering event of the effective medium (albedo, NEE, phase sampling), then VPT,
+/// and (modes with DA) DA connections deep inside. Returns the radiance; counts DA connections
+/// in `counters`; `*da_part` (if given) receives the part gathered after the first DA
+/// connection (the DA contribution; the rest is VPT's).
+template <LitScene Scene, class Distance>
+    requires PhaseMedium<typename Scene::Medium>
+[[nodiscard]] typename Scene::Spectrum hybrid_vpt_continuation(const Scene& scene_vpt, const HybridContext<Distance>& ctx,
+                                                               const Vec3d& x, const Vec3d& d,
+                                                               const typename Scene::Spectrum& beta, Rng& rng,
+                                                               const HybridOptions& opt,
+                                                               HybridCounters* counters = nullptr,
+                                                               typename Scene::Spectrum* da_part = nullptr) noexcept {
+    using F = typename Scene::Float;
+    using S = typename Scene::Spectrum;
+    using M = typename Scene::Medium;
+    constexpr F inf = std::numeric_limits<F>::infinity();
+    const M& m = scene_vpt.medium(ctx.medium);
+    detail::HybridVptCallbacks<Scene, Distance> cb{VptCallbacks<Scene>{scene_vpt, rng, opt.vpt}, ctx};
+    cb.da_enabled = hybrid_uses_da(opt.mode) && ctx.diffusion != nullptr;
+    WalkOptions<F> wopt;
+    wopt.max_depth = opt.vpt.max_depth;
+    wopt.rr_depth = opt.vpt.rr_depth;
+    wopt.mode = TransportMode::radiance;
+    if (da_part) *da_part = S(F(0));
+
+    PathState<F, S> st = start_path<F, S>(Ray<F>(Vec3<F>(x), Vec3<F>(d)), ctx.medium, beta);
+    if constexpr (requires { m.albedo(); }) st.throughput *= m.albedo();
+    Interaction<F, S> it;
+    it.kind = EventKind::scatter;
+    it.p = Vec3<F>(x);
+    it.nee = NeeKind::phase;
+    st.depth = 1;
+    bool walk_on = true;
+    if (cb.da_enabled && ball_inside(ctx.distance, x, ctx.diffusion->d_DA)) {  // test in double precision
+        cb.da_pending = true;
+        cb.da_x = x;
+        walk_on = false;
+    } else {
+        walk_on = cb.on_scatter(st, it, m);
+    }
+    if (walk_on) {
+        const auto ps = m.phase().sample(Vec3<F>(d), rng.uniform2<F>());
+        if (!ps) return cb.vpt.L;
+        st.throughput *= ps.weight;
+        st.ray = Ray<F>(Vec3<F>(x), ps.w, inf, st.ray.cone);
+        st.specular = false;
+        st.last_pdf = ps.pdf;
+        st.last_p = Vec3<F>(x);
+    }
+    return detail::hybrid_walk_with_da(scene_vpt, ctx, cb, st, walk_on, rng, opt, wopt, counters, da_part);
+}
+
+/// A camera path of the VPT-only modes (HybridMode::vpt, vpt_da; Meng15 Fig. 11's "VPT" and
+/// "VPT+DA"): `ray` starts in vacuum (medium -1) in `scene_vpt` and enters the effective medium
+/// through the index-matched boundary; VPT with DA connections deep inside when the mode has
+/// DA. Returns the radiance; `*da_part` as in hybrid_vpt_continuation.
+template <LitScene Scene, class Distance>
+    requires PhaseMedium<typename Scene::Medium>
+[[nodiscard]] typename Scene::Spectrum hybrid_vpt_camera_path(const Scene& scene_vpt, const HybridContext<Distance>& ctx,
+                                                              const Ray<typename Scene::Float>& ray, Rng& rng,
+                                                              const HybridOptions& opt, HybridCounters* counters = nullptr,
+                                                              typename Scene::Spectrum* da_part = nullptr) noexcept {
+    using F = typename Scene::Float;
+    using S = typename Scene::Spectrum;
+    detail::HybridVptCallbacks<Scene, Distance> cb{VptCallbacks<Scene>{scene_vpt, rng, opt.vpt}, ctx};
+    cb.da_enabled = hybrid_uses_da(opt.mode) && ctx.diffusion != nullptr;
+    WalkOptions<F> wopt;
+    wopt.max_depth = opt.vpt.max_depth;
+    wopt.rr_depth = opt.vpt.rr_depth;
+    wopt.mode = TransportMode::radiance;
+    PathState<F, S> st = start_path<F, S>(ray, -1);
+    return detail::hybrid_walk_with_da(scene_vpt, ctx, cb, st, true, rng, opt, wopt, counters, da_part);
 }
 
 /// Radiance (mean over directions, as seen by a scattering vertex) at an interior point x
@@ -443,7 +555,7 @@ template <LitScene Scene, class Distance>
     const auto& m = scene_vpt.medium(ctx.medium);
     if constexpr (requires { m.albedo(); })
         for (std::size_t c = 0; c < S::size; ++c) beta[c] = m.albedo()[c] > F(0) ? F(1) / m.albedo()[c] : F(0);
-    if (!(ctx.diffusion && ctx.distance(x) >= ctx.diffusion->d_DA)) return S(F(0));
+    if (!(ctx.diffusion && ball_inside(ctx.distance, x, ctx.diffusion->d_DA))) return S(F(0));
     return hybrid_vpt_continuation(scene_vpt, ctx, x, Vec3d(0, 0, 1), beta, rng, opt);
 }
 
@@ -457,6 +569,7 @@ template <class S>
 struct HybridPathRadiance {
     S low{0.0f};
     S high{0.0f};
+    S da{0.0f};             ///< the part of `high` gathered after a DA connection
     bool switched = false;  ///< switched (or, in mode ept, reached the would-be switch)
     int switch_order = 0;   ///< grain interactions in EPT before the switch
 };
@@ -477,6 +590,12 @@ struct HybridBundleResult {
     [[nodiscard]] S mean_high() const noexcept {
         S s(typename S::value_type(0));
         for (int i = 0; i < n; ++i) s += path[std::size_t(i)].high;
+        return s / typename S::value_type(n);
+    }
+    /// Mean over the bundle's paths of the DA part of the high-order radiance.
+    [[nodiscard]] S mean_da() const noexcept {
+        S s(typename S::value_type(0));
+        for (int i = 0; i < n; ++i) s += path[std::size_t(i)].da;
         return s / typename S::value_type(n);
     }
 };
@@ -519,6 +638,15 @@ template <LitScene Scene, BoundaryShape Shape, class Distance>
     bool armed = false;
     double t_high = 0;
     const auto t0 = opt.measure_time ? Clock::now() : Clock::time_point{};
+    if (!hybrid_uses_ept(opt.mode)) {
+        // Fig. 11's VPT and VPT+DA: no grains; the whole path is the "high-order" part.
+        for (int i = 0; i < n; ++i) {
+            auto& path = res.path[std::size_t(i)];
+            path.high = hybrid_vpt_camera_path(scene_vpt, ctx, rays[i], rngs[i], opt, &res.counters, &path.da);
+        }
+        if (opt.measure_time) res.seconds_high = std::chrono::duration<double>(Clock::now() - t0).count();
+        return res;
+    }
     int alive = n;
     std::array<Vec3d, 64> xs;
     while (alive > 0) {
@@ -555,8 +683,10 @@ template <LitScene Scene, BoundaryShape Shape, class Distance>
                 res.counters.switch_depth += std::uint64_t(res.path[std::size_t(i)].switch_order);
                 const S beta = q.beta / typename S::value_type(opt.acceptance);
                 const auto th0 = opt.measure_time ? Clock::now() : Clock::time_point{};
+                S da_part(0.0f);
                 res.path[std::size_t(i)].high +=
-                    hybrid_vpt_continuation(scene_vpt, ctx, x_switch, q.d, beta, rng, opt, &res.counters);
+                    hybrid_vpt_continuation(scene_vpt, ctx, x_switch, q.d, beta, rng, opt, &res.counters, &da_part);
+                res.path[std::size_t(i)].da += da_part;
                 if (opt.measure_time) t_high += std::chrono::duration<double>(Clock::now() - th0).count();
             }
         }
@@ -595,7 +725,11 @@ template <LitScene Scene, BoundaryShape Shape, class Distance>
 /// Result of a hybrid render: low-order (EPT) and high-order (after the switch) images, the
 /// per-pixel variance statistics of the bundle samples and the CPU time of the two parts.
 struct HybridImages {
+    /// low: the EPT part (Fig. 12's EPT contribution); high: everything after the switch (VPT +
+    /// DA; in the VPT-only modes the whole image).
     Film low, high;
+    /// The part of `high` gathered after a DA connection (Fig. 12's DA contribution).
+    Film da;
     /// Per pixel: mean number of EPT grain interactions before the switch over the paths that
     /// switched (0 where none did), in all three channels (Meng15 Fig. 12's switch-depth view).
     Image switch_depth;
@@ -605,12 +739,25 @@ struct HybridImages {
     double m2_high = 0;             ///< mean over pixels of the second moment E[H^2] of the high-order part
     double cpu_seconds_low = 0, cpu_seconds_high = 0;  ///< thread CPU seconds, summed over threads
     HybridCounters counters{};
+    HybridMode mode = HybridMode::ept_vpt;  ///< the techniques of the render
     [[nodiscard]] Image combined() const {
         Image a = low.image();
         const Image b = high.image();
         for (std::size_t i = 0; i < a.rgb.size(); ++i) a.rgb[i] += b.rgb[i];
         return a;
     }
+    /// Fig. 12's per-technique contributions: EPT (low; in mode ept the whole image).
+    [[nodiscard]] Image ept_image() const { return mode == HybridMode::ept ? combined() : low.image(); }
+    /// VPT's contribution: high order minus the DA part (0 in mode ept).
+    [[nodiscard]] Image vpt_image() const {
+        if (mode == HybridMode::ept) return Image(high.width(), high.height());
+        Image a = high.image();
+        const Image b = da.image();
+        for (std::size_t i = 0; i < a.rgb.size(); ++i) a.rgb[i] -= b.rgb[i];
+        return a;
+    }
+    /// DA's contribution.
+    [[nodiscard]] Image da_image() const { return da.image(); }
     /// CPU seconds per bundle sample per pixel (the time of a 1-spp image).
     [[nodiscard]] double seconds_per_spp() const noexcept {
         return spp > 0 ? (cpu_seconds_low + cpu_seconds_high) / double(spp) : 0.0;
@@ -638,20 +785,21 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
     check_argument(threads >= 0, "render_hybrid", "threads", threads, ">= 0");
     check_argument(stride >= 1, "render_hybrid", "stride", stride, ">= 1");
     opt.validate("render_hybrid");
-    check_argument(opt.mode != HybridMode::ept_vpt_da || ctx.diffusion != nullptr, "render_hybrid", "ctx.diffusion",
-                   "null", "a HybridDiffusion for mode ept_vpt_da");
+    check_argument(!hybrid_uses_da(opt.mode) || ctx.diffusion != nullptr, "render_hybrid", "ctx.diffusion",
+                   "null", "a HybridDiffusion for the modes with DA (ept_vpt_da, vpt_da)");
     check_argument(ctx.medium >= 0, "render_hybrid", "ctx.medium", ctx.medium, ">= 0");
     using F = typename Camera::Float;
     using S = typename Scene::Spectrum;
     check_material_channels(agg, S::size, "render_hybrid");
-    if (opt.mode == HybridMode::ept_vpt_da)
+    if (hybrid_uses_da(opt.mode))
         check_argument(ctx.diffusion->compatible_with(S::size), "render_hybrid", "ctx.diffusion channels",
                        ctx.diffusion->channel.size(), "1 (grey) or " + std::to_string(S::size) + " (the spectrum's channels)");
     opt.measure_time = true;
     const int W = camera.width(), H = camera.height();
     const int w = (W + stride - 1) / stride, h = (H + stride - 1) / stride;
     const int N = opt.bundle_size;
-    HybridImages img{Film(w, h), Film(w, h), Image(w, h), spp};
+    HybridImages img{Film(w, h), Film(w, h), Film(w, h), Image(w, h), spp};
+    img.mode = opt.mode;
     struct RowStats {
         double var_t = 0, var_l = 0, var_h = 0, m2_h = 0, sec_l = 0, sec_h = 0;
         HybridCounters c{};
@@ -684,11 +832,16 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
                         depth_sum += double(b.path[std::size_t(i)].switch_order);
                         depth_n += 1;
                     }
-                S lo = b.mean_low(), hi = b.mean_high();
+                S lo = b.mean_low(), hi = b.mean_high(), da = b.mean_da();
                 if (!lo.is_finite()) lo = S(0.0f);
-                if (!hi.is_finite()) hi = S(0.0f);
+                if (!hi.is_finite()) {
+                    hi = S(0.0f);
+                    da = S(0.0f);
+                }
+                if (!da.is_finite()) da = S(0.0f);
                 img.low.add_sample(x, y, lo);
                 img.high.add_sample(x, y, hi);
+                img.da.add_sample(x, y, da);
                 wl.add(double(lo.average()));
                 wh.add(double(hi.average()));
                 wt.add(double(lo.average()) + double(hi.average()));
