@@ -737,6 +737,12 @@ struct HybridImages {
     double var_total = 0;           ///< mean over pixels of the sample variance of one bundle estimate (channel mean)
     double var_low = 0, var_high = 0;
     double m2_high = 0;             ///< mean over pixels of the second moment E[H^2] of the high-order part
+    /// Standard error of var_total (spread of the per-pixel variances over the pixels / sqrt(pixels)).
+    double var_total_se = 0;
+    /// Per pixel: sample variance of one bundle estimate, total / low / high order (channels 0-2).
+    Image pixel_variance;
+    /// Per pixel: E[H^2] of the high-order part of one bundle estimate (channel 0).
+    Image pixel_m2_high;
     double cpu_seconds_low = 0, cpu_seconds_high = 0;  ///< thread CPU seconds, summed over threads
     HybridCounters counters{};
     HybridMode mode = HybridMode::ept_vpt;  ///< the techniques of the render
@@ -798,10 +804,17 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
     const int W = camera.width(), H = camera.height();
     const int w = (W + stride - 1) / stride, h = (H + stride - 1) / stride;
     const int N = opt.bundle_size;
-    HybridImages img{Film(w, h), Film(w, h), Film(w, h), Image(w, h), spp};
+    HybridImages img;
+    img.low = Film(w, h);
+    img.high = Film(w, h);
+    img.da = Film(w, h);
+    img.switch_depth = Image(w, h);
+    img.spp = spp;
     img.mode = opt.mode;
+    img.pixel_variance = Image(w, h);
+    img.pixel_m2_high = Image(w, h);
     struct RowStats {
-        double var_t = 0, var_l = 0, var_h = 0, m2_h = 0, sec_l = 0, sec_h = 0;
+        double var_t = 0, var_t2 = 0, var_l = 0, var_h = 0, m2_h = 0, sec_l = 0, sec_h = 0;
         HybridCounters c{};
     };
     std::vector<RowStats> rows(static_cast<std::size_t>(h));
@@ -850,9 +863,14 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
                 rs.c.merge(b.counters);
             }
             rs.var_t += wt.variance();
+            rs.var_t2 += wt.variance() * wt.variance();
             rs.var_l += wl.variance();
             rs.var_h += wh.variance();
             rs.m2_h += wh.variance() + wh.mean() * wh.mean();
+            img.pixel_variance.at(x, y, 0) = float(wt.variance());
+            img.pixel_variance.at(x, y, 1) = float(wl.variance());
+            img.pixel_variance.at(x, y, 2) = float(wh.variance());
+            img.pixel_m2_high.at(x, y, 0) = float(wh.variance() + wh.mean() * wh.mean());
             for (int c = 0; c < 3; ++c) img.switch_depth.at(x, y, c) = depth_n > 0 ? float(depth_sum / depth_n) : 0.0f;
         }
         // The row's thread CPU time, split between the two parts in the ratio of their
@@ -863,7 +881,9 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
         rs.sec_h = wall > 0 ? cpu * wall_h / wall : 0.0;
         progress(1);
     }
+    double var_t2 = 0;
     for (const RowStats& rs : rows) {
+        var_t2 += rs.var_t2;
         img.var_total += rs.var_t;
         img.var_low += rs.var_l;
         img.var_high += rs.var_h;
@@ -874,6 +894,7 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
     }
     const double np = double(w) * double(h);
     img.var_total /= np;
+    img.var_total_se = np > 1 ? std::sqrt(std::max(0.0, var_t2 / np - img.var_total * img.var_total) / (np - 1)) : 0.0;
     img.var_low /= np;
     img.var_high /= np;
     img.m2_high /= np;
@@ -891,7 +912,89 @@ struct AcceptanceEstimate {
     /// V_L -> V - E[H^2], V_H -> E[H^2]. Eq. 6 neglects (1 / P_a - 1) E[H]^2 and the low/high
     /// covariance; this one does not.
     double P_a_moments = 1;
+    /// The acceptance that never loses (what render drivers should use; docs/meng15_hybrid.md):
+    /// P_a_robust below when its predicted gain is resolved, i.e. gain - 2 gain_se > 1, else 1.
+    double P_a_safe = 1;
+    /// Eq. 8, moments form, on robust preview moments: the preview pixels are split into 8
+    /// interleaved groups and V, E[H^2] are the means of the group means without the largest
+    /// and the smallest (one glint in one pixel cannot dominate).
+    double P_a_robust = 1;
+    double gain = 1;     ///< predicted ttuv(P_a = 1) / ttuv(P_a_robust) (exact roulette variance x Eq. 7)
+    double gain_se = 0;  ///< its jackknife standard error over the 8 groups
+    double V_robust = 0;   ///< robust total variance V of one sample at P_a = 1
+    double M_robust = 0;   ///< robust E[H^2] of one sample (P_a_robust = Eq. 8 with V_L = V - M, V_H = M)
 };
+
+/// The robust and the safe acceptance (AcceptanceEstimate::P_a_robust, P_a_safe, gain,
+/// gain_se) from a preview rendered at P_a = 1 (its per-pixel variances) and the per-sample
+/// costs t_L, t_H of its two parts. Fills those four fields of `a`.
+inline void robust_acceptance(const HybridImages& pv, double t_L, double t_H, AcceptanceEstimate& a,
+                              double p_min = 1.0 / 64.0) {
+    constexpr int G = 8;
+    const int w = pv.pixel_variance.width, h = pv.pixel_variance.height;
+    std::array<double, G> V{}, M{}, n{};
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const int g = (x + 3 * y) % G;
+            V[std::size_t(g)] += double(pv.pixel_variance.at(x, y, 0));
+            M[std::size_t(g)] += double(pv.pixel_m2_high.at(x, y, 0));
+            n[std::size_t(g)] += 1;
+        }
+    int groups = 0;
+    for (int g = 0; g < G; ++g)
+        if (n[std::size_t(g)] > 0) {
+            V[std::size_t(groups)] = V[std::size_t(g)] / n[std::size_t(g)];
+            M[std::size_t(groups)] = M[std::size_t(g)] / n[std::size_t(g)];
+            ++groups;
+        }
+    a.P_a_robust = a.P_a_safe = 1;
+    a.gain = 1;
+    a.gain_se = 0;
+    if (groups < 4 || !(t_L > 0) || !(t_H > 0)) return;
+    // Mean of the group values without the largest and the smallest (of V; M follows its group).
+    auto trimmed = [&](int skip, double& v, double& m) {
+        int lo = -1, hi = -1;
+        for (int g = 0; g < groups; ++g) {
+            if (g == skip) continue;
+            if (lo < 0 || V[std::size_t(g)] < V[std::size_t(lo)]) lo = g;
+            if (hi < 0 || V[std::size_t(g)] > V[std::size_t(hi)]) hi = g;
+        }
+        v = m = 0;
+        int k = 0;
+        for (int g = 0; g < groups; ++g) {
+            if (g == skip || g == lo || g == hi) continue;
+            v += V[std::size_t(g)];
+            m += M[std::size_t(g)];
+            ++k;
+        }
+        v /= std::max(1, k);
+        m /= std::max(1, k);
+    };
+    auto gain_at = [&](double v, double m, double P) {
+        const double p1 = predicted_ttuv(v - m, m, t_L, t_H, 1.0), pp = predicted_ttuv(v - m, m, t_L, t_H, P);
+        return pp > 0 ? p1 / pp : 1.0;
+    };
+    double v, m;
+    trimmed(-1, v, m);
+    a.V_robust = v;
+    a.M_robust = m;
+    a.P_a_robust = optimal_acceptance(v - m, m, t_L, t_H, p_min);
+    a.gain = gain_at(v, m, a.P_a_robust);
+    // Jackknife over the groups.
+    std::array<double, G> gj{};
+    double gm = 0;
+    for (int g = 0; g < groups; ++g) {
+        double vj, mj;
+        trimmed(g, vj, mj);
+        gj[std::size_t(g)] = gain_at(vj, mj, a.P_a_robust);
+        gm += gj[std::size_t(g)];
+    }
+    gm /= double(groups);
+    double ss = 0;
+    for (int g = 0; g < groups; ++g) ss += (gj[std::size_t(g)] - gm) * (gj[std::size_t(g)] - gm);
+    a.gain_se = std::sqrt(double(groups - 1) / double(groups) * ss);
+    a.P_a_safe = a.gain - 2.0 * a.gain_se > 1.0 ? a.P_a_robust : 1.0;
+}
 
 /// Estimate the optimal acceptance probability (Eq. 8) from a preview render of every
 /// `stride`-th pixel (10: Meng15's 1%-size image) with P_a = 1 and the same spp.
@@ -912,6 +1015,7 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera>
     a.t_H = pv.cpu_seconds_high / np;
     a.P_a = optimal_acceptance(a.V_L, a.V_H, a.t_L, a.t_H);
     a.P_a_moments = optimal_acceptance(pv.var_total - pv.m2_high, pv.m2_high, a.t_L, a.t_H);
+    robust_acceptance(pv, a.t_L, a.t_H, a);
     return a;
 }
 
