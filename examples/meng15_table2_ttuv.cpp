@@ -306,11 +306,11 @@ int main(int argc, char** argv) {
                [&](Example& ex) {
         const std::string scenes_arg =
             ex.opt<std::string>("scenes", "snow_sphere,snowman_1m", "snow_sphere,snowman_1m,snowman_10cm", "scenes to render");
-        const int spp = ex.opt<int>("spp", 8, 16, "bundles of 16 paths per pixel (>= 8: the variance batches)");
-        const int width = ex.opt<int>("width", 64, 160, "image width (height = 3/4 width)");
+        const int spp = ex.opt<int>("spp", 8, 8, "bundles of 16 paths per pixel (>= 8: the variance batches)");
+        const int width = ex.opt<int>("width", 64, 96, "image width (height = 3/4 width)");
         const double size = ex.opt<double>("size", 60.0, 400.0, "snowman height / 2.5 x sphere radius, in grain radii");
         const double absorption = ex.opt<double>("absorption", 1e-3, 3e-4, "grain interior absorption per grain radius (green)");
-        const int stride = ex.opt<int>("preview-stride", 4, 8, "P_a preview: every k-th pixel in x and y");
+        const int stride = ex.opt<int>("preview-stride", 4, 4, "P_a preview: every k-th pixel in x and y");
         const int level = ex.opt<int>("grain-level", 3, 4, "icosphere level of the snow grain mesh");
         const double exposure = ex.opt<double>("exposure", 0.0, "PNG exposure in stops");
         ex.ready();
