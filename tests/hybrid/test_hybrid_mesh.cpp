@@ -14,6 +14,7 @@
 
 #include "grainlight/geometry/distance.hpp"
 #include "grainlight/geometry/grains.hpp"
+#include "grainlight/geometry/procedural_boundaries.hpp"
 #include "grainlight/integrators/hybrid.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/media/teleportation.hpp"
@@ -271,4 +272,37 @@ TEST_CASE("Fig. 11's five combinations and Fig. 12's per-technique films on a me
     // All five see the same object under the same sky (means within the DA / medium tolerances).
     for (int i = 0; i < 4; ++i) REQUIRE(mean[i] == Approx(mean[4]).epsilon(0.25));
     REQUIRE_THROWS_WITH(add_mesh_boundary(vpt, TriangleMesh<double>{}, m, &diff), Catch::Contains("MeshBoundary"));
+}
+
+TEST_CASE("Snowman boundary mesh (geometry/procedural_boundaries.hpp): closed, the union of its balls", "[hybrid][mesh]") {
+    const double H = 100;
+    const TriangleMesh<double> m = make_snowman_mesh(H, 96, 64);
+    REQUIRE(m.is_watertight());
+    REQUIRE(m.signed_volume() > 0);
+    const SnowmanBalls b = snowman_balls();
+    const double s = H / b.top;
+    // Volume of the union of the balls above y = 0: int pi rho(y)^2 dy (midpoint rule, 2e5 steps).
+    double V = 0;
+    const int n = 200000;
+    for (int i = 0; i < n; ++i) {
+        const double yu = b.top * (double(i) + 0.5) / double(n);
+        double r2 = 0;
+        for (int k = 0; k < 3; ++k) r2 = std::max(r2, b.radius[k] * b.radius[k] - (yu - b.center[k]) * (yu - b.center[k]));
+        V += pi_v<double> * r2 * b.top / double(n);
+    }
+    V *= s * s * s;
+    // Inscribed polygons of 64 sides lose ~0.16 % of the area per ring; rings cut the necks.
+    REQUIRE(m.signed_volume() == Approx(V).epsilon(0.01));
+    REQUIRE(m.bounds().hi.y == Approx(H));
+    REQUIRE(m.bounds().lo.y == Approx(0.0).margin(1e-12));
+    const MeshDistance md(m);
+    for (int k = 0; k < 3; ++k) REQUIRE(md.inside(Vec3d(0, s * b.center[k], 0)));
+    REQUIRE_FALSE(md.inside(Vec3d(0, -1, 0)));
+    REQUIRE_FALSE(md.inside(Vec3d(s * b.radius[0] * 1.01, s * b.center[0], 0)));
+    // Centre of the bottom ball: nearest surface is the flat cut 0.85 r below.
+    REQUIRE(md(Vec3d(0, s * b.center[0], 0)) == Approx(s * b.center[0]).epsilon(1e-9));
+    // Centre of the top ball: the ball's own radius (polygon: within 0.2 %).
+    REQUIRE(md(Vec3d(0, s * b.center[2], 0)) == Approx(s * b.radius[2]).epsilon(0.003));
+    REQUIRE_THROWS_WITH(make_snowman_mesh(-1.0), Catch::Contains("H"));
+    REQUIRE_THROWS_WITH(make_revolution_mesh([](double) { return 1.0; }, 1.0, 1, 8), Catch::Contains("rings"));
 }
