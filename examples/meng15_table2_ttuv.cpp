@@ -30,6 +30,7 @@
 
 #include "common/harness.hpp"
 #include "grainlight/geometry/grains.hpp"
+#include "grainlight/geometry/procedural_boundaries.hpp"
 #include "grainlight/integrators/hybrid.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/media/teleportation.hpp"
@@ -65,49 +66,6 @@ constexpr double table2_speedup[4][4] = {{4.00, 6.50, 7.40, 8.00}, {2.10, 2.20, 
                                          {16.8, 54.4, 102.0, 114.0}};
 constexpr double table2_speedup_high[4][4] = {{130.8, 137.8, 2554.0, 1968.0}, {206.8, 230.0, 26.5, 242.0},
                                               {404.6, 385.3, 8473.0, 7394.0}, {381.5, 271.4, 6431.0, 4997.0}};
-
-// A snowman as one closed surface of revolution about +y: three overlapping balls (radii in
-// units of the height H), the bottom ball cut flat at y = 0. Rings denser near the top pole.
-gl::TriangleMesh<double> make_snowman_mesh(double H, int rings, int segments) {
-    const double r[3] = {0.23, 0.165, 0.115};
-    double c[3];
-    c[0] = 0.85 * r[0];
-    c[1] = c[0] + 0.8 * (r[0] + r[1]);
-    c[2] = c[1] + 0.8 * (r[1] + r[2]);
-    const double top = c[2] + r[2], s = H / top;
-    auto rho = [&](double y) {
-        double m = 0;
-        for (int i = 0; i < 3; ++i) m = std::max(m, std::sqrt(std::max(0.0, r[i] * r[i] - (y - c[i]) * (y - c[i]))));
-        return m;
-    };
-    gl::TriangleMesh<double> mesh;
-    mesh.vertices.push_back(gl::Vec3d(0.0));  // bottom centre
-    for (int k = 0; k < rings; ++k) {
-        // y from 0 (the flat cut) to just below the top pole, denser near the pole.
-        const double u = double(k) / double(rings);
-        const double yy = top * std::sin(0.5 * gl::pi_v<double> * u);
-        const double rr = std::max(rho(yy), 1e-4);
-        for (int j = 0; j < segments; ++j) {
-            const double phi = 2.0 * gl::pi_v<double> * double(j) / double(segments);
-            mesh.vertices.push_back(s * gl::Vec3d(rr * std::cos(phi), yy, rr * std::sin(phi)));
-        }
-    }
-    mesh.vertices.push_back(gl::Vec3d(0.0, H, 0.0));  // top pole
-    const auto ring = [&](int k, int j) { return std::uint32_t(1 + k * segments + (j % segments)); };
-    const std::uint32_t pole = std::uint32_t(mesh.vertices.size() - 1);
-    for (int j = 0; j < segments; ++j) mesh.triangles.push_back({0u, ring(0, j), ring(0, j + 1)});
-    for (int k = 0; k + 1 < rings; ++k)
-        for (int j = 0; j < segments; ++j) {
-            mesh.triangles.push_back({ring(k, j), ring(k + 1, j), ring(k + 1, j + 1)});
-            mesh.triangles.push_back({ring(k, j), ring(k + 1, j + 1), ring(k, j + 1)});
-        }
-    for (int j = 0; j < segments; ++j) mesh.triangles.push_back({ring(rings - 1, j), pole, ring(rings - 1, j + 1)});
-    if (mesh.signed_volume() < 0)
-        for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
-    mesh.compute_face_normals();
-    mesh.validate("make_snowman_mesh");
-    return mesh;
-}
 
 struct Measured {
     std::string technique;
@@ -373,7 +331,7 @@ int main(int argc, char** argv) {
             } else {
                 const bool small = key == "snowman_10cm";
                 const double Hs = small ? size / 10.0 : size;
-                const gl::TriangleMesh<double> mesh = make_snowman_mesh(Hs, ex.full() ? 192 : 96, ex.full() ? 128 : 64);
+                const gl::TriangleMesh<double> mesh = gl::make_snowman_mesh(Hs, ex.full() ? 192 : 96, ex.full() ? 128 : 64);
                 const gl::MeshBoundary shape(mesh);
                 const gl::GranularAggregate<gl::MeshBoundary> agg(
                     g.tile, gl::VoxelizedBoundary<gl::MeshBoundary>(shape, g.tile.side()),
