@@ -53,12 +53,14 @@ template <class Distance>
 
 /// Signed distance to a sphere surface (positive inside).
 struct SphereDistance {
-    Vec3d center{0.0};
-    double radius = 1.0;
+    Vec3d center{0.0};  ///< sphere centre
+    double radius = 1.0;  ///< sphere radius (> 0)
+    /// Throws grainlight::invalid_argument for a non-finite centre or radius <= 0.
     SphereDistance(const Vec3d& c, double r) : center(c), radius(r) {
         check_argument(std::isfinite(r) && r > 0, "SphereDistance", "radius", r, "(0, inf)");
         check_argument(std::isfinite(c.x + c.y + c.z), "SphereDistance", "center", c.x + c.y + c.z, "finite");
     }
+    /// Signed distance (positive inside).
     [[nodiscard]] double operator()(const Vec3d& p) const noexcept { return radius - glm::length(p - center); }
     /// Distance along unit w from p (inside) to the surface (0 if p is outside and w points away).
     [[nodiscard]] double exit_distance(const Vec3d& p, const Vec3d& w) const noexcept {
@@ -70,12 +72,15 @@ struct SphereDistance {
 
 /// Signed distance to the surface of the axis-aligned box [lo, hi] (positive inside).
 struct BoxDistance {
-    Vec3d lo{-1.0}, hi{1.0};
+    Vec3d lo{-1.0};  ///< lower corner
+    Vec3d hi{1.0};   ///< upper corner
+    /// Throws grainlight::invalid_argument unless hi > lo on every axis.
     BoxDistance(const Vec3d& lo_, const Vec3d& hi_) : lo(lo_), hi(hi_) {
         for (int a = 0; a < 3; ++a)
             check_argument(std::isfinite(hi[a] - lo[a]) && hi[a] > lo[a], "BoxDistance", "hi - lo", hi[a] - lo[a],
                            "(0, inf) on every axis");
     }
+    /// Signed distance (positive inside; outside: the Euclidean distance to the box, negated).
     [[nodiscard]] double operator()(const Vec3d& p) const noexcept {
         double inside = std::numeric_limits<double>::infinity(), out2 = 0;
         bool outside = false;
@@ -102,7 +107,8 @@ struct BoxDistance {
 /// Signed distance to the faces of the slab -thickness < z < 0 (thickness > 0, may be +inf:
 /// the half-space z < 0).
 struct SlabDistance {
-    double thickness = 1.0;
+    double thickness = 1.0;  ///< slab thickness (> 0; +inf: half-space)
+    /// Signed distance to the nearer face (positive inside).
     [[nodiscard]] double operator()(const Vec3d& p) const noexcept {
         const double top = -p.z;
         return std::isfinite(thickness) ? std::min(top, p.z + thickness) : top;
@@ -173,6 +179,7 @@ struct NearestPoint {
 /// checks). Copies share the immutable tree.
 class MeshDistance {
 public:
+    /// Build the distance tree (and MeshBoundary's ray BVH) over a closed mesh.
     template <std::floating_point F>
     explicit MeshDistance(const TriangleMesh<F>& mesh) : inside_(mesh) {
         auto d = std::make_shared<Data>();
@@ -319,7 +326,9 @@ public:
         const double d = unsigned_distance(p);
         return inside(p) ? d : -d;
     }
+    /// Bounding box of the mesh.
     [[nodiscard]] Aabb<double> bounds() const noexcept { return inside_.bounds(); }
+    /// Number of triangles.
     [[nodiscard]] std::size_t triangle_count() const noexcept { return data_->tris.size(); }
 
 private:

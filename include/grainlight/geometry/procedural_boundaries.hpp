@@ -57,8 +57,8 @@ namespace grainlight {
 
 /// Radii and centre heights (units of the total height) of the snowman's three balls.
 struct SnowmanBalls {
-    double radius[3];
-    double center[3];
+    double radius[3];  ///< ball radii, bottom to top (units of the unscaled height `top`)
+    double center[3];  ///< ball centre heights on the y axis (same units)
     double top;  ///< height of the top pole before scaling (the mesh is scaled to height H)
 };
 

@@ -135,7 +135,7 @@ namespace detail {
 
 /// The half-space z < z0 (tests: Meng15 App. A's planar assumption holds exactly).
 struct HalfSpaceBoundary {
-    double z0 = 0;
+    double z0 = 0;  ///< height of the boundary plane
 };
 /// Distance from p to the plane z = z0 of a half-space z < z0.
 [[nodiscard]] inline double distance_to_boundary(const HalfSpaceBoundary& h, const Vec3d& p) noexcept {
@@ -145,12 +145,14 @@ struct HalfSpaceBoundary {
 /// Callable distance-to-boundary for a shape with a `distance_to_boundary` overload.
 template <class Shape>
 struct BoundaryDistance {
-    Shape shape;
+    Shape shape;  ///< the boundary shape
+    /// distance_to_boundary(shape, p).
     [[nodiscard]] double operator()(const Vec3d& p) const noexcept { return distance_to_boundary(shape, p); }
 };
 
 /// A distance that is never large enough (disables the DA switch).
 struct NoBoundaryDistance {
+    /// Always 0.
     [[nodiscard]] double operator()(const Vec3d&) const noexcept { return 0.0; }
 };
 
@@ -189,7 +191,7 @@ enum class HybridMode : std::uint8_t {
 
 /// Options of the hybrid integrator (defaults: Meng15 Sec. 5).
 struct HybridOptions {
-    HybridMode mode = HybridMode::ept_vpt;
+    HybridMode mode = HybridMode::ept_vpt;  ///< techniques (Fig. 11)
     int bundle_size = 16;           ///< N: paths per bundle (1..64)
     double tau = 4.0;               ///< Eq. 5 threshold in grain (bounding-sphere) radii
     int min_ept_interactions = 1;   ///< grain interactions in EPT before a path may switch
@@ -217,7 +219,7 @@ struct HybridOptions {
 /// A: eta = 1) and the switch distance d_DA. One entry per spectrum channel of the render, or one
 /// entry (or identical entries) for a grey medium; render_hybrid rejects any other count.
 struct HybridDiffusion {
-    std::vector<ImprovedDiffusion<double>> channel;
+    std::vector<ImprovedDiffusion<double>> channel;  ///< improved diffusion per spectrum channel
     double d_DA = 0;  ///< max over channels of min(1 / sigma_t', 0.5 / sigma_tr)
 
     /// Every channel has the same parameters.
@@ -303,6 +305,7 @@ struct HybridCounters {
     std::uint64_t switch_depth = 0;  ///< sum of grain interactions in EPT before the switch
     std::uint64_t da = 0;            ///< DA connections
     std::uint64_t grain_rays = 0;    ///< Algorithm 1 traversals
+    /// Add another set of counters.
     void merge(const HybridCounters& o) noexcept {
         paths += o.paths;
         switched += o.switched;
@@ -567,8 +570,8 @@ template <LitScene Scene, class Distance>
 /// the (possibly virtual) switch (high order).
 template <class S>
 struct HybridPathRadiance {
-    S low{0.0f};
-    S high{0.0f};
+    S low{0.0f};            ///< radiance gathered in EPT before the switch
+    S high{0.0f};           ///< radiance gathered after the (possibly virtual) switch
     S da{0.0f};             ///< the part of `high` gathered after a DA connection
     bool switched = false;  ///< switched (or, in mode ept, reached the would-be switch)
     int switch_order = 0;   ///< grain interactions in EPT before the switch
@@ -577,16 +580,18 @@ struct HybridPathRadiance {
 /// A bundle's result: per-path radiances and the CPU seconds of the two parts.
 template <class S, int NMax = 64>
 struct HybridBundleResult {
-    std::array<HybridPathRadiance<S>, NMax> path{};
-    int n = 0;
-    double seconds_low = 0, seconds_high = 0;
-    HybridCounters counters{};
+    std::array<HybridPathRadiance<S>, NMax> path{};  ///< per-path radiances (first n used)
+    int n = 0;                                       ///< paths in the bundle
+    double seconds_low = 0;                          ///< steady-clock seconds of the EPT part
+    double seconds_high = 0;                         ///< steady-clock seconds of the part after the switch
+    HybridCounters counters{};                       ///< switch / DA counters
     /// Mean over the bundle's paths of the low / high / total radiance.
     [[nodiscard]] S mean_low() const noexcept {
         S s(typename S::value_type(0));
         for (int i = 0; i < n; ++i) s += path[std::size_t(i)].low;
         return s / typename S::value_type(n);
     }
+    /// Mean over the bundle's paths of the high-order radiance.
     [[nodiscard]] S mean_high() const noexcept {
         S s(typename S::value_type(0));
         for (int i = 0; i < n; ++i) s += path[std::size_t(i)].high;
@@ -727,7 +732,8 @@ template <LitScene Scene, BoundaryShape Shape, class Distance>
 struct HybridImages {
     /// low: the EPT part (Fig. 12's EPT contribution); high: everything after the switch (VPT +
     /// DA; in the VPT-only modes the whole image).
-    Film low, high;
+    Film low;
+    Film high;  ///< see `low`
     /// The part of `high` gathered after a DA connection (Fig. 12's DA contribution).
     Film da;
     /// Per pixel: mean number of EPT grain interactions before the switch over the paths that
@@ -735,7 +741,8 @@ struct HybridImages {
     Image switch_depth;
     int spp = 0;                    ///< bundles per pixel
     double var_total = 0;           ///< mean over pixels of the sample variance of one bundle estimate (channel mean)
-    double var_low = 0, var_high = 0;
+    double var_low = 0;   ///< the same for the low-order (EPT) part
+    double var_high = 0;  ///< the same for the high-order part
     double m2_high = 0;             ///< mean over pixels of the second moment E[H^2] of the high-order part
     /// Standard error of var_total (spread of the per-pixel variances over the pixels / sqrt(pixels)).
     double var_total_se = 0;
@@ -743,9 +750,11 @@ struct HybridImages {
     Image pixel_variance;
     /// Per pixel: E[H^2] of the high-order part of one bundle estimate (channel 0).
     Image pixel_m2_high;
-    double cpu_seconds_low = 0, cpu_seconds_high = 0;  ///< thread CPU seconds, summed over threads
-    HybridCounters counters{};
+    double cpu_seconds_low = 0;   ///< thread CPU seconds of the low-order part, summed over threads
+    double cpu_seconds_high = 0;  ///< the same for the high-order part
+    HybridCounters counters{};    ///< switch / DA counters of the render
     HybridMode mode = HybridMode::ept_vpt;  ///< the techniques of the render
+    /// The image: low + high.
     [[nodiscard]] Image combined() const {
         Image a = low.image();
         const Image b = high.image();
@@ -905,7 +914,10 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
 /// high-order parts of one bundle sample), t_L, t_H (CPU seconds of the two parts per bundle
 /// sample per pixel) and P_a of Eq. 8.
 struct AcceptanceEstimate {
-    double V_L = 0, V_H = 0, t_L = 0, t_H = 0;
+    double V_L = 0;  ///< variance of the low-order part of one sample
+    double V_H = 0;  ///< variance of the high-order part of one sample
+    double t_L = 0;  ///< CPU seconds of the low-order part per sample
+    double t_H = 0;  ///< CPU seconds of the high-order part per sample
     double P_a = 1;  ///< Eq. 8 (Meng15)
     /// Eq. 8 with the exact variance of the roulette estimator L + H 1{u < P_a} / P_a:
     /// Var = (V - E[H^2]) + E[H^2] / P_a (V = total variance at P_a = 1), i.e. Eq. 8 with
