@@ -7,14 +7,15 @@
 //                 surface of revolution, flat bottom) through add_mesh_boundary: the DA switch
 //                 asks the mesh's distance tree (MeshDistance::ball_inside);
 //   snowman_10cm  the same snowman with the grain radius x 10 (Fig. 13 bottom; full quality, or
-//                 --scenes).
+//                 --scenes);
+//   obj           any closed OBJ mesh (--obj FILE), centred, standing on the ground, --size tall.
 // Each scene is printed beside Table 2's row (SNOWMAN LG. / SM.; the sphere has no row: Table 2's
 // range over its four scenes). P_a opt uses AcceptanceEstimate::P_a_safe (docs/meng15_hybrid.md:
 // robust preview moments, kept at 1 unless the predicted gain is resolved); when it is 1 the
 // P_a = 1 render is reused (the same paths: no timing noise between the two rows).
 //
 //   meng15_table2_ttuv [--quality quick|full] [--out DIR] [--seed S] [--threads N] [--scenes a,b]
-//                      [--spp N] [--width W] [--size R] [--absorption A] [--preview-stride K]
+//                      [--spp N] [--width W] [--size R] [--absorption A] [--preview-stride K] [--obj FILE]
 //
 // ttuv per measuring.md: per pixel the sample variance over spp >= 8 independent bundle samples
 // (B = spp batches), averaged over the pixels, times the thread CPU seconds of a 1-spp image;
@@ -271,6 +272,7 @@ int main(int argc, char** argv) {
         const int stride = ex.opt<int>("preview-stride", 4, 4, "P_a preview: every k-th pixel in x and y");
         const int level = ex.opt<int>("grain-level", 3, 4, "icosphere level of the snow grain mesh");
         const double exposure = ex.opt<double>("exposure", 0.0, "PNG exposure in stops");
+        const std::string obj = ex.opt<std::string>("obj", "", "closed OBJ mesh for the scene 'obj' (scaled to --size grain radii tall)");
         ex.ready();
         if (spp < 8 || spp > 4096) throw cli_error("--spp must be in [8, 4096] (measuring.md: >= 8 batches)");
         if (width < 8 || width > 2048) throw cli_error("--width must be in [8, 2048]");
@@ -284,8 +286,9 @@ int main(int argc, char** argv) {
             std::string s;
             while (std::getline(ss, s, ','))
                 if (!s.empty()) {
-                    if (s != "snow_sphere" && s != "snowman_1m" && s != "snowman_10cm")
-                        throw cli_error("--scenes: '" + s + "' is not one of snow_sphere, snowman_1m, snowman_10cm");
+                    if (s != "snow_sphere" && s != "snowman_1m" && s != "snowman_10cm" && s != "obj")
+                        throw cli_error("--scenes: '" + s + "' is not one of snow_sphere, snowman_1m, snowman_10cm, obj");
+                    if (s == "obj" && obj.empty()) throw cli_error("--scenes obj needs --obj FILE");
                     scenes.push_back(s);
                 }
         }
@@ -331,7 +334,19 @@ int main(int argc, char** argv) {
             } else {
                 const bool small = key == "snowman_10cm";
                 const double Hs = small ? size / 10.0 : size;
-                const gl::TriangleMesh<double> mesh = gl::make_snowman_mesh(Hs, ex.full() ? 192 : 96, ex.full() ? 128 : 64);
+                gl::TriangleMesh<double> mesh;
+                if (key == "obj") {
+                    // Any closed OBJ: centred in x and z, standing on y = 0, scaled to Hs tall.
+                    mesh = gl::load_obj<double>(obj);
+                    const gl::Aabb<double> bb = mesh.bounds();
+                    const double hgt = bb.hi.y - bb.lo.y;
+                    if (!(hgt > 0)) throw cli_error("--obj: '" + obj + "' has no height");
+                    const gl::Vec3d c(0.5 * (bb.lo.x + bb.hi.x), bb.lo.y, 0.5 * (bb.lo.z + bb.hi.z));
+                    for (auto& v : mesh.vertices) v = (v - c) * (Hs / hgt);
+                    mesh.compute_face_normals();
+                } else {
+                    mesh = gl::make_snowman_mesh(Hs, ex.full() ? 192 : 96, ex.full() ? 128 : 64);
+                }
                 const gl::MeshBoundary shape(mesh);
                 const gl::GranularAggregate<gl::MeshBoundary> agg(
                     g.tile, gl::VoxelizedBoundary<gl::MeshBoundary>(shape, g.tile.side()),
@@ -345,10 +360,12 @@ int main(int argc, char** argv) {
                 const float Hf = float(Hs);
                 const gl::PinholeCamera<float> cam(gl::Vec3f(0.0f, 0.55f * Hf, 1.45f * Hf), gl::Vec3f(0.0f, 0.46f * Hf, 0.0f),
                                                    gl::Vec3f(0, 1, 0), 36.0f, width, height);
-                std::printf("\nscene %s: snowman %.0f grain radii tall (%s; mesh boundary of %zu triangles, DA switch via "
+                std::printf("\nscene %s: %s %.0f grain radii tall (%s; mesh boundary of %zu triangles, DA switch via "
                             "MeshDistance::ball_inside)\n",
-                            key.c_str(), Hs, small ? "Fig. 13 bottom: grain radius x10" : "Fig. 13 top", mesh.triangle_count());
-                r = run_scene(ex, key, agg, ept, vpt, ctx, cam, rc, small ? 3 : 2);
+                            key.c_str(), key == "obj" ? obj.c_str() : "snowman", Hs,
+                            key == "obj" ? "user mesh" : small ? "Fig. 13 bottom: grain radius x10" : "Fig. 13 top",
+                            mesh.triangle_count());
+                r = run_scene(ex, key, agg, ept, vpt, ctx, cam, rc, key == "obj" ? -1 : small ? 3 : 2);
             }
             const int prow = key == "snowman_1m" ? 2 : key == "snowman_10cm" ? 3 : -1;
             for (std::size_t i = 0; i < r.rows.size(); ++i) {

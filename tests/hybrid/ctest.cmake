@@ -21,6 +21,16 @@ if(TARGET meng15_table2_ttuv OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_
                    "-DCHECKS=ept_vpt_speedup > 0;ept_vpt_da_speedup > 0;ept_vpt_pa_opt_speedup > 0;ept_vpt_da_pa_opt_speedup > 0;ept_vpt_speedup_high_order > 0;ept_vpt_da_speedup_high_order > 0;abs(bias_ept_vpt) < 0.15;abs(bias_ept_vpt_da) < 0.3;bias_ept_vpt_stderr > 0;bias_ept_vpt_da_stderr > 0"
                    -P ${PROJECT_SOURCE_DIR}/tests/hybrid/check_scenes_json.cmake)
   set_tests_properties(meng15_table2_ttuv_quick PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
+  # A user OBJ as the aggregate boundary (tests/data/blob_snow_grain.obj: a procedural blob) with
+  # the DA switch through its MeshDistance, 40 grain radii tall.
+  add_test(NAME meng15_table2_ttuv_obj
+           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:meng15_table2_ttuv>
+                   "-DARGS=--scenes;obj;--obj;${PROJECT_SOURCE_DIR}/tests/data/blob_snow_grain.obj;--size;40;--width;32;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_table2_ttuv_obj"
+                   "-DSCENES=obj"
+                   "-DKEYS=ept_vpt_speedup;ept_vpt_speedup_high_order;ept_vpt_da_speedup;ept_vpt_da_speedup_high_order;bias_ept_vpt;bias_ept_vpt_stderr;bias_ept_vpt_da;bias_ept_vpt_da_stderr"
+                   "-DCHECKS=ept_vpt_speedup > 1;ept_vpt_da_speedup > 1;abs(bias_ept_vpt) < 0.25;abs(bias_ept_vpt_da) < 0.35"
+                   -P ${PROJECT_SOURCE_DIR}/tests/hybrid/check_scenes_json.cmake)
+  set_tests_properties(meng15_table2_ttuv_obj PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
   add_test(NAME meng15_table2_ttuv_bad_scene COMMAND $<TARGET_FILE:meng15_table2_ttuv> --scenes castle)
   set_tests_properties(meng15_table2_ttuv_bad_scene PROPERTIES WILL_FAIL TRUE LABELS "example;hybrid")
 endif()
