@@ -60,7 +60,10 @@ int main(int argc, char** argv) {
             .option("radius", "radius of the sphere of grains in grain radii (default 20 quick, 40 full)")
             .option("absorption", "interior absorption of the ice-like grains per grain radius (green)", "0.01")
             .option("width", "image width in pixels (height = 3/4 width; default 120 quick, 240 full)")
-            .option("pa-estimator", "paper (Eq. 8 with Eq. 6's variances) | moments (exact roulette variance)", "paper")
+            .option("pa-estimator",
+                    "safe (robust moments, 1 unless the gain is resolved) | robust | paper (Eq. 8 with Eq. 6's variances) | "
+                    "moments (exact roulette variance)",
+                    "safe")
             .option("preview-stride", "P_a preview: every k-th pixel in x and y (Meng15: 10, i.e. 1% of the pixels)", "10")
             .option("pa", "pin P_a of the 'P_a opt' techniques to this value in (0, 1] (no preview; reproducible output)")
             .option("exposure", "PNG exposure in stops", "0");
@@ -80,9 +83,9 @@ int main(int argc, char** argv) {
         if (preview_stride < 1 || preview_stride > 100) throw cli_error("--preview-stride must be in [1, 100]");
         const double pa_pinned = cli.has("pa") ? cli.num("pa", 1.0) : 0.0;
         if (cli.has("pa") && !(pa_pinned > 0.0 && pa_pinned <= 1.0)) throw cli_error("--pa must be in (0, 1]");
-        const std::string pa_estimator = cli.str("pa-estimator", "paper");
-        if (pa_estimator != "paper" && pa_estimator != "moments")
-            throw cli_error("--pa-estimator = '" + pa_estimator + "' must be paper or moments");
+        const std::string pa_estimator = cli.str("pa-estimator", "safe");
+        if (pa_estimator != "paper" && pa_estimator != "moments" && pa_estimator != "robust" && pa_estimator != "safe")
+            throw cli_error("--pa-estimator = '" + pa_estimator + "' must be safe, robust, paper or moments");
         const std::uint64_t width_arg = cli.integer("width", full ? 240 : 120);
         if (width_arg < 8 || width_arg > 4096) throw cli_error("--width must be in [8, 4096]");
         const int width = int(width_arg), height = std::max(6, int(width_arg * 3 / 4));
@@ -165,10 +168,14 @@ int main(int argc, char** argv) {
                 const gl::AcceptanceEstimate a =
                     gl::estimate_optimal_acceptance(scene_ept, scene_vpt, agg, ctx, camera, int(spp), seed + 1, threads, opt,
                                                     int(preview_stride));
-                Pa = pa_estimator == "paper" ? a.P_a : a.P_a_moments;
+                Pa = pa_estimator == "paper"     ? a.P_a
+                     : pa_estimator == "moments" ? a.P_a_moments
+                     : pa_estimator == "robust"  ? a.P_a_robust
+                                                 : a.P_a_safe;
                 std::printf("  %-18s preview (every %dth pixel): V_L %.4g V_H %.4g t_L %.3g s t_H %.3g s -> P_a %.3f (Eq. 8), "
-                            "%.3f (moments)\n",
-                            t.name.c_str(), int(preview_stride), a.V_L, a.V_H, a.t_L, a.t_H, a.P_a, a.P_a_moments);
+                            "%.3f (moments), %.3f (robust, gain %.2f +- %.2f), %.3f (safe)\n",
+                            t.name.c_str(), int(preview_stride), a.V_L, a.V_H, a.t_L, a.t_H, a.P_a, a.P_a_moments,
+                            a.P_a_robust, a.gain, a.gain_se, a.P_a_safe);
             }
             opt.acceptance = Pa;
             ProgressBar bar(t.name, std::uint64_t(height));

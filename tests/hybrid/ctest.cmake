@@ -1,5 +1,6 @@
 # Extra ctest entries for the hybrid area (included from tests/CMakeLists.txt): a tiny run of the
-# Meng15 hybrid example (small sphere of grains) reports its speedups; bad arguments exit with 2.
+# Meng15 hybrid example (small sphere of grains) reports its speedups; bad arguments exit with 2;
+# meng15_table2_ttuv at quick prints Table 2's JSON shape with finite numbers.
 if(TARGET meng15_hybrid_convergence OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/meng15_hybrid_convergence.cpp))
   add_test(NAME meng15_hybrid_tiny
            COMMAND $<TARGET_FILE:meng15_hybrid_convergence> --spp 2 --radius 10 --width 32 --threads 2
@@ -8,4 +9,38 @@ if(TARGET meng15_hybrid_convergence OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${P
                        LABELS "example;hybrid")
   add_test(NAME meng15_hybrid_bad_spp COMMAND $<TARGET_FILE:meng15_hybrid_convergence> --spp 1)
   set_tests_properties(meng15_hybrid_bad_spp PROPERTIES WILL_FAIL TRUE LABELS "example;hybrid")
+endif()
+if(TARGET meng15_table2_ttuv OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/meng15_table2_ttuv.cpp))
+  # Quick quality (the main job's run, ~1 min on 2 cores): every scene has the ten keys as finite
+  # numbers, speedups > 0, |bias of VPT| < 0.15 and |bias of DA| < 0.3 (generous sanity bounds).
+  add_test(NAME meng15_table2_ttuv_quick
+           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:meng15_table2_ttuv>
+                   "-DARGS=--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_table2_ttuv"
+                   "-DSCENES=snow_sphere;snowman_1m"
+                   "-DKEYS=ept_vpt_speedup;ept_vpt_speedup_high_order;ept_vpt_pa_opt_speedup;ept_vpt_da_speedup;ept_vpt_da_speedup_high_order;ept_vpt_da_pa_opt_speedup;bias_ept_vpt;bias_ept_vpt_stderr;bias_ept_vpt_da;bias_ept_vpt_da_stderr"
+                   "-DCHECKS=ept_vpt_speedup > 0;ept_vpt_da_speedup > 0;ept_vpt_pa_opt_speedup > 0;ept_vpt_da_pa_opt_speedup > 0;ept_vpt_speedup_high_order > 0;ept_vpt_da_speedup_high_order > 0;abs(bias_ept_vpt) < 0.15;abs(bias_ept_vpt_da) < 0.3;bias_ept_vpt_stderr > 0;bias_ept_vpt_da_stderr > 0"
+                   -P ${PROJECT_SOURCE_DIR}/tests/hybrid/check_scenes_json.cmake)
+  set_tests_properties(meng15_table2_ttuv_quick PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
+  # A user OBJ as the aggregate boundary (tests/data/blob_snow_grain.obj: a procedural blob) with
+  # the DA switch through its MeshDistance, 40 grain radii tall.
+  add_test(NAME meng15_table2_ttuv_obj
+           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:meng15_table2_ttuv>
+                   "-DARGS=--scenes;obj;--obj;${PROJECT_SOURCE_DIR}/tests/data/blob_snow_grain.obj;--size;40;--width;32;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_table2_ttuv_obj"
+                   "-DSCENES=obj"
+                   "-DKEYS=ept_vpt_speedup;ept_vpt_speedup_high_order;ept_vpt_da_speedup;ept_vpt_da_speedup_high_order;bias_ept_vpt;bias_ept_vpt_stderr;bias_ept_vpt_da;bias_ept_vpt_da_stderr"
+                   "-DCHECKS=ept_vpt_speedup > 1;ept_vpt_da_speedup > 1;abs(bias_ept_vpt) < 0.25;abs(bias_ept_vpt_da) < 0.35"
+                   -P ${PROJECT_SOURCE_DIR}/tests/hybrid/check_scenes_json.cmake)
+  set_tests_properties(meng15_table2_ttuv_obj PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
+  add_test(NAME meng15_table2_ttuv_bad_scene COMMAND $<TARGET_FILE:meng15_table2_ttuv> --scenes castle)
+  set_tests_properties(meng15_table2_ttuv_bad_scene PROPERTIES WILL_FAIL TRUE LABELS "example;hybrid")
+endif()
+if(TARGET meng15_fig11_snow_sphere OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/meng15_fig11_snow_sphere.cpp))
+  # Fig. 11 at quick: a few EPT bounces before VPT recover the grain-scale detail VPT alone misses
+  # (RMS difference to EPT beyond noise: measured 60 % for VPT, 0 for EPT+VPT), means within 15 %.
+  add_test(NAME meng15_fig11_snow_sphere_quick
+           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:meng15_fig11_snow_sphere>
+                   "-DARGS=--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_fig11_snow_sphere"
+                   "-DCHECKS=vpt_detail_rms > ept_vpt_detail_rms + 0.1;vpt_da_detail_rms > ept_vpt_da_detail_rms + 0.1;abs(ept_vpt_rel_diff) < 0.15;abs(vpt_rel_diff) < 0.15;abs(ept_vpt_da_rel_diff) < 0.3;ept_vpt_speedup > 1"
+                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
+  set_tests_properties(meng15_fig11_snow_sphere_quick PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
 endif()

@@ -367,3 +367,75 @@ TEST_CASE("Eq. 5: bundle spread and the switch criterion", "[hybrid][criterion]"
     REQUIRE(sw4 > 100);
     REQUIRE(double(d4) / double(sw4) > 1.5);
 }
+
+TEST_CASE("P_a that never loses: robust preview moments and the resolved-gain rule", "[hybrid][acceptance]") {
+    // Synthetic previews (per-pixel variances at P_a = 1) with known Eq. 8 optimum.
+    auto preview = [](int w, int h, double VLp, double M, double noise, std::uint64_t seed) {
+        HybridImages pv;
+        pv.pixel_variance = Image(w, h);
+        pv.pixel_m2_high = Image(w, h);
+        Rng rng = Rng::from_key(seed, 0, 0);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                // log-normal pixel scatter of relative width `noise`, mean preserved
+                // of the low- and the high-order parts, independently.
+                auto factor = [&] {
+                    const double z =
+                        std::sqrt(-2 * std::log(1 - rng.uniform<double>())) * std::cos(2 * pi_v<double> * rng.uniform<double>());
+                    return std::exp(noise * z - 0.5 * noise * noise);
+                };
+                const double m = M * factor();
+                pv.pixel_variance.at(x, y, 0) = float(VLp * factor() + m);
+                pv.pixel_m2_high.at(x, y, 0) = float(m);
+            }
+        return pv;
+    };
+    SECTION("a resolved gain: Eq. 8 (moments form) is taken") {
+        // V - M = 4, M = 1, t_L = 1, t_H = 4 -> P_a = 1/4, predicted gain (5 x 5) / (8 x 2) = 1.5625.
+        const HybridImages pv = preview(20, 20, 4.0, 1.0, 0.1, 1);
+        AcceptanceEstimate a;
+        robust_acceptance(pv, 1.0, 4.0, a);
+        INFO("robust " << a.P_a_robust << " gain " << a.gain << " +- " << a.gain_se);
+        REQUIRE(a.P_a_robust == Approx(0.25).epsilon(0.05));
+        REQUIRE(a.gain == Approx(25.0 / 16.0).epsilon(0.02));
+        REQUIRE(a.gain_se < 0.05);
+        REQUIRE(a.P_a_safe == a.P_a_robust);
+    }
+    SECTION("one glint pixel in the low order does not pull P_a down") {
+        // Flat scene whose optimum is 1 (V - M = 0.03, M = 0.04, t_L = t_H); one pixel's low
+        // order has variance 1000 (a glint of the light in a grain, as in the quick runs).
+        HybridImages pv = preview(12, 9, 0.03, 0.04, 0.1, 2);
+        pv.pixel_variance.at(5, 4, 0) = 1000.0f;
+        double V = 0, M = 0;
+        for (int y = 0; y < 9; ++y)
+            for (int x = 0; x < 12; ++x) {
+                V += pv.pixel_variance.at(x, y, 0) / 108.0;
+                M += pv.pixel_m2_high.at(x, y, 0) / 108.0;
+            }
+        const double pooled = optimal_acceptance(V - M, M, 1.0, 1.0);
+        REQUIRE(pooled < 0.1);  // what the plain preview mean would choose
+        AcceptanceEstimate a;
+        robust_acceptance(pv, 1.0, 1.0, a);
+        REQUIRE(a.P_a_robust == 1.0);
+        REQUIRE(a.P_a_safe == 1.0);
+    }
+    SECTION("a gain inside the preview's noise keeps P_a = 1") {
+        // V - M = 1, M = 0.6, t_L = 1, t_H = 2: P_a = 0.548, predicted gain only 1.09; the pixel
+        // variances scatter by a factor ~3 over 64 pixels (8 per group).
+        const HybridImages pv = preview(8, 8, 1.0, 0.6, 1.2, 3);
+        AcceptanceEstimate a;
+        robust_acceptance(pv, 1.0, 2.0, a);
+        INFO("robust " << a.P_a_robust << " gain " << a.gain << " +- " << a.gain_se);
+        REQUIRE(a.P_a_robust < 0.9);
+        REQUIRE(a.gain - 2 * a.gain_se <= 1.0);
+        REQUIRE(a.P_a_safe == 1.0);
+    }
+    SECTION("too few pixels or no cost: 1") {
+        const HybridImages pv = preview(2, 1, 4.0, 1.0, 0.1, 4);
+        AcceptanceEstimate a;
+        robust_acceptance(pv, 1.0, 4.0, a);
+        REQUIRE(a.P_a_safe == 1.0);
+        robust_acceptance(preview(20, 20, 4.0, 1.0, 0.1, 1), 1.0, 0.0, a);
+        REQUIRE(a.P_a_safe == 1.0);
+    }
+}

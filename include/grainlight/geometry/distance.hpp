@@ -13,7 +13,9 @@
 ///     exact nearest point over all triangles (Ericson, *Real-Time Collision Detection*, 2005,
 ///     Sec. 5.1.5), found by branch-and-bound over a bounding-box tree of the triangles; the sign
 ///     comes from MeshBoundary's ray-parity inside test (its triangle BVH, geometry/bvh.hpp).
-///     `nearest(p)` also returns the nearest point and triangle.
+///     `nearest(p)` also returns the nearest point and triangle; `ball_inside(p, r)` is the
+///     conservative "no triangle within r and p inside" query with early exit (Meng15 Sec. 5's
+///     DA switch); `auxiliary_thickness(p, w)` is App. A's slab thickness z_r + z_a.
 /// Each also has `exit_distance(p, w)`: the distance along the unit direction w from p to the
 /// first surface crossing (the "distance to surface along omega" of Moon07 Fig. 5).
 /// Queries are const, thread-safe, allocation-free and noexcept; constructors validate.
@@ -22,6 +24,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <concepts>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -38,19 +41,26 @@ namespace grainlight {
 
 /// True if the closed ball of radius r about p lies inside the volume of the signed distance
 /// query `dist` (see the file comment).
+/// Queries with a member `ball_inside(p, r)` (MeshDistance: stops at the first triangle closer
+/// than r) use it; the others compare the signed distance.
 template <class Distance>
 [[nodiscard]] inline bool ball_inside(const Distance& dist, const Vec3d& p, double r) noexcept {
-    return dist(p) >= r;
+    if constexpr (requires { { dist.ball_inside(p, r) } -> std::convertible_to<bool>; })
+        return dist.ball_inside(p, r);
+    else
+        return dist(p) >= r;
 }
 
 /// Signed distance to a sphere surface (positive inside).
 struct SphereDistance {
-    Vec3d center{0.0};
-    double radius = 1.0;
+    Vec3d center{0.0};  ///< sphere centre
+    double radius = 1.0;  ///< sphere radius (> 0)
+    /// Throws grainlight::invalid_argument for a non-finite centre or radius <= 0.
     SphereDistance(const Vec3d& c, double r) : center(c), radius(r) {
         check_argument(std::isfinite(r) && r > 0, "SphereDistance", "radius", r, "(0, inf)");
         check_argument(std::isfinite(c.x + c.y + c.z), "SphereDistance", "center", c.x + c.y + c.z, "finite");
     }
+    /// Signed distance (positive inside).
     [[nodiscard]] double operator()(const Vec3d& p) const noexcept { return radius - glm::length(p - center); }
     /// Distance along unit w from p (inside) to the surface (0 if p is outside and w points away).
     [[nodiscard]] double exit_distance(const Vec3d& p, const Vec3d& w) const noexcept {
@@ -62,12 +72,15 @@ struct SphereDistance {
 
 /// Signed distance to the surface of the axis-aligned box [lo, hi] (positive inside).
 struct BoxDistance {
-    Vec3d lo{-1.0}, hi{1.0};
+    Vec3d lo{-1.0};  ///< lower corner
+    Vec3d hi{1.0};   ///< upper corner
+    /// Throws grainlight::invalid_argument unless hi > lo on every axis.
     BoxDistance(const Vec3d& lo_, const Vec3d& hi_) : lo(lo_), hi(hi_) {
         for (int a = 0; a < 3; ++a)
             check_argument(std::isfinite(hi[a] - lo[a]) && hi[a] > lo[a], "BoxDistance", "hi - lo", hi[a] - lo[a],
                            "(0, inf) on every axis");
     }
+    /// Signed distance (positive inside; outside: the Euclidean distance to the box, negated).
     [[nodiscard]] double operator()(const Vec3d& p) const noexcept {
         double inside = std::numeric_limits<double>::infinity(), out2 = 0;
         bool outside = false;
@@ -94,7 +107,8 @@ struct BoxDistance {
 /// Signed distance to the faces of the slab -thickness < z < 0 (thickness > 0, may be +inf:
 /// the half-space z < 0).
 struct SlabDistance {
-    double thickness = 1.0;
+    double thickness = 1.0;  ///< slab thickness (> 0; +inf: half-space)
+    /// Signed distance to the nearer face (positive inside).
     [[nodiscard]] double operator()(const Vec3d& p) const noexcept {
         const double top = -p.z;
         return std::isfinite(thickness) ? std::min(top, p.z + thickness) : top;
@@ -165,6 +179,7 @@ struct NearestPoint {
 /// checks). Copies share the immutable tree.
 class MeshDistance {
 public:
+    /// Build the distance tree (and MeshBoundary's ray BVH) over a closed mesh.
     template <std::floating_point F>
     explicit MeshDistance(const TriangleMesh<F>& mesh) : inside_(mesh) {
         auto d = std::make_shared<Data>();
@@ -242,6 +257,66 @@ public:
         return best;
     }
 
+    /// True if some surface point is closer to p than r (branch-and-bound that stops at the
+    /// first triangle found within r; cheaper than nearest() when the answer is yes).
+    [[nodiscard]] bool any_within(const Vec3d& p, double r) const noexcept {
+        if (!(r > 0)) return false;
+        // Prune boxes with a slightly larger radius (never skip a triangle within r by rounding);
+        // decide on triangles with the same sqrt as nearest(), so ball_inside(p, (*this)(p)) holds.
+        const double r2 = r * r * (1.0 + 1e-12);
+        const auto& nodes = data_->nodes;
+        std::uint32_t stack[128];
+        int sp = 0;
+        stack[sp++] = 0;
+        while (sp > 0) {
+            const Node& nd = nodes[stack[--sp]];
+            if (distance2_to_box(nd.box, p) >= r2) continue;
+            if (nd.count > 0) {
+                for (std::uint32_t i = nd.first; i < nd.first + nd.count; ++i) {
+                    const auto& t = data_->tris[i];
+                    const Vec3d q = closest_point_on_triangle(p, t[0], t[1], t[2]);
+                    const double d2 = glm::dot(q - p, q - p);
+                    if (d2 < r2 && std::sqrt(d2) < r) return true;
+                }
+                continue;
+            }
+            if (sp + 2 > 128) return true;  // conservative (cannot happen for balanced trees)
+            const std::uint32_t a = nd.first, b = nd.first + 1;
+            if (distance2_to_box(nodes[a].box, p) < distance2_to_box(nodes[b].box, p)) {
+                stack[sp++] = b;
+                stack[sp++] = a;
+            } else {
+                stack[sp++] = a;
+                stack[sp++] = b;
+            }
+        }
+        return false;
+    }
+    /// The conservative "is the closed ball B(p, r) inside the volume" query (Meng15 Sec. 5's
+    /// VPT -> DA criterion "no triangle within d_DA", Moon07's largest shell that fits): true iff
+    /// p is inside and no surface point is closer than r. Same answer as `(*this)(p) >= r`, but
+    /// the triangle search stops early and the (costlier) parity test runs only when no triangle
+    /// is near.
+    [[nodiscard]] bool ball_inside(const Vec3d& p, double r) const noexcept {
+        if (!bounds().contains(p)) return false;
+        if (any_within(p, r)) return false;
+        return inside(p);
+    }
+    /// Meng15 App. A's slab thickness from an interior point p along the unit direction w of the
+    /// DA connection: z_r = depth of p below the tangent plane at the exit point x_s = p + t_s w,
+    /// z_a = depth below the tangent plane at x_a = p - t_a w (the auxiliary ray), thickness
+    /// z_r + z_a. Returns +inf when either ray misses or leaves at a grazing/wrong-facing
+    /// triangle (callers then use the semi-infinite profile).
+    [[nodiscard]] double auxiliary_thickness(const Vec3d& p, const Vec3d& w) const noexcept {
+        constexpr double inf = std::numeric_limits<double>::infinity();
+        const TriangleHit<double> hs = data_->bvh.intersect(p, w, 0.0, inf);
+        const TriangleHit<double> ha = data_->bvh.intersect(p, -w, 0.0, inf);
+        if (!hs || !ha) return inf;
+        const double z_r = hs.t * glm::dot(w, hs.n_geom), z_a = ha.t * glm::dot(-w, ha.n_geom);
+        if (!(z_r > 0) || !(z_a > 0)) return inf;
+        return z_r + z_a;
+    }
+
     /// Unsigned distance from p to the surface.
     [[nodiscard]] double unsigned_distance(const Vec3d& p) const noexcept { return nearest(p).distance; }
     /// p strictly inside (ray parity, MeshBoundary::inside).
@@ -251,7 +326,9 @@ public:
         const double d = unsigned_distance(p);
         return inside(p) ? d : -d;
     }
+    /// Bounding box of the mesh.
     [[nodiscard]] Aabb<double> bounds() const noexcept { return inside_.bounds(); }
+    /// Number of triangles.
     [[nodiscard]] std::size_t triangle_count() const noexcept { return data_->tris.size(); }
 
 private:

@@ -48,9 +48,18 @@
 /// ept_radiance with the same generator (each path of a bundle has its own counter-based
 /// generator Pcg32::from_key(seed, pixel, bundle * N + i), as render_ept's sample index).
 ///
+/// Techniques (Meng15 Fig. 11): HybridMode ept, ept_vpt, ept_vpt_da, and the grain-free vpt and
+/// vpt_da (camera paths enter the effective medium directly: hybrid_vpt_camera_path). Films
+/// (Fig. 12): HybridImages::ept_image / vpt_image / da_image (what each technique gathered) and
+/// switch_depth.
+///
 /// Distance to the boundary: any callable double(const Vec3d&) returning the distance (or a
-/// lower bound) from an interior point to the boundary surface; `BoundaryDistance<Shape>`
-/// provides it for SphereBoundary, BoxBoundary and the half-space used in tests.
+/// lower bound) from an interior point to the boundary surface; the DA switch asks
+/// `ball_inside(distance, x, d_DA)` (geometry/distance.hpp), which uses a member
+/// `ball_inside(x, r)` when the callable has one. `BoundaryDistance<Shape>` covers
+/// SphereBoundary, BoxBoundary and the half-space used in tests; `add_mesh_boundary` makes any
+/// closed triangle mesh (an OBJ) the boundary: the mesh goes into scene_vpt and its MeshDistance
+/// (exact nearest point through a box tree, early-exit ball query) drives the switch.
 ///
 /// Kernel rules: no allocation, no exceptions, no virtual calls; randomness only from the paths'
 /// generators. The clock is read only when HybridOptions::measure_time is set.
@@ -74,6 +83,8 @@
 #include "grainlight/core/warp.hpp"
 #include "grainlight/diffusion/improved.hpp"
 #include "grainlight/diffusion/multipole.hpp"
+#include "grainlight/geometry/distance.hpp"
+#include "grainlight/geometry/triangle_mesh.hpp"
 #include "grainlight/integrators/ept.hpp"
 #include "grainlight/integrators/render.hpp"
 #include "grainlight/integrators/vpt.hpp"
@@ -81,6 +92,8 @@
 #include "grainlight/media/teleportation.hpp"
 #include "grainlight/scene/concepts.hpp"
 #include "grainlight/scene/film.hpp"
+#include "grainlight/scene/scene.hpp"
+#include "grainlight/scene/shapes.hpp"
 #include "grainlight/traversal/aggregate.hpp"
 
 #if defined(_OPENMP)
@@ -122,7 +135,7 @@ namespace detail {
 
 /// The half-space z < z0 (tests: Meng15 App. A's planar assumption holds exactly).
 struct HalfSpaceBoundary {
-    double z0 = 0;
+    double z0 = 0;  ///< height of the boundary plane
 };
 /// Distance from p to the plane z = z0 of a half-space z < z0.
 [[nodiscard]] inline double distance_to_boundary(const HalfSpaceBoundary& h, const Vec3d& p) noexcept {
@@ -132,12 +145,14 @@ struct HalfSpaceBoundary {
 /// Callable distance-to-boundary for a shape with a `distance_to_boundary` overload.
 template <class Shape>
 struct BoundaryDistance {
-    Shape shape;
+    Shape shape;  ///< the boundary shape
+    /// distance_to_boundary(shape, p).
     [[nodiscard]] double operator()(const Vec3d& p) const noexcept { return distance_to_boundary(shape, p); }
 };
 
 /// A distance that is never large enough (disables the DA switch).
 struct NoBoundaryDistance {
+    /// Always 0.
     [[nodiscard]] double operator()(const Vec3d&) const noexcept { return 0.0; }
 };
 
@@ -145,16 +160,38 @@ struct NoBoundaryDistance {
 // Options, diffusion parameters, Eq. 8
 // ---------------------------------------------------------------------------------------------
 
-/// Which techniques a hybrid render uses.
+/// Which techniques a hybrid render uses: the five combinations of Meng15 Fig. 11.
 enum class HybridMode : std::uint8_t {
     ept,         ///< EPT only (the criterion only splits low/high order)
     ept_vpt,     ///< EPT -> VPT
-    ept_vpt_da   ///< EPT -> VPT -> DA
+    ept_vpt_da,  ///< EPT -> VPT -> DA
+    vpt,         ///< VPT only: camera paths enter the effective medium directly (no grains)
+    vpt_da       ///< VPT -> DA (no grains)
 };
+
+/// The mode switches to diffusion deep inside.
+[[nodiscard]] constexpr bool hybrid_uses_da(HybridMode m) noexcept {
+    return m == HybridMode::ept_vpt_da || m == HybridMode::vpt_da;
+}
+/// The mode traces camera paths through the explicit grains first.
+[[nodiscard]] constexpr bool hybrid_uses_ept(HybridMode m) noexcept {
+    return m == HybridMode::ept || m == HybridMode::ept_vpt || m == HybridMode::ept_vpt_da;
+}
+/// Fig. 11's label of a mode: "EPT", "EPT+VPT", "EPT+VPT+DA", "VPT", "VPT+DA".
+[[nodiscard]] inline const char* hybrid_mode_name(HybridMode m) noexcept {
+    switch (m) {
+        case HybridMode::ept: return "EPT";
+        case HybridMode::ept_vpt: return "EPT+VPT";
+        case HybridMode::ept_vpt_da: return "EPT+VPT+DA";
+        case HybridMode::vpt: return "VPT";
+        case HybridMode::vpt_da: return "VPT+DA";
+    }
+    return "?";
+}
 
 /// Options of the hybrid integrator (defaults: Meng15 Sec. 5).
 struct HybridOptions {
-    HybridMode mode = HybridMode::ept_vpt;
+    HybridMode mode = HybridMode::ept_vpt;  ///< techniques (Fig. 11)
     int bundle_size = 16;           ///< N: paths per bundle (1..64)
     double tau = 4.0;               ///< Eq. 5 threshold in grain (bounding-sphere) radii
     int min_ept_interactions = 1;   ///< grain interactions in EPT before a path may switch
@@ -182,7 +219,7 @@ struct HybridOptions {
 /// A: eta = 1) and the switch distance d_DA. One entry per spectrum channel of the render, or one
 /// entry (or identical entries) for a grey medium; render_hybrid rejects any other count.
 struct HybridDiffusion {
-    std::vector<ImprovedDiffusion<double>> channel;
+    std::vector<ImprovedDiffusion<double>> channel;  ///< improved diffusion per spectrum channel
     double d_DA = 0;  ///< max over channels of min(1 / sigma_t', 0.5 / sigma_tr)
 
     /// Every channel has the same parameters.
@@ -239,6 +276,27 @@ struct HybridContext {
     const HybridDiffusion* diffusion = nullptr;  ///< required for HybridMode::ept_vpt_da
 };
 
+/// A closed triangle mesh (e.g. load_obj) as the aggregate boundary of the hybrid: adds the mesh
+/// to `scene_vpt` as the index-matched surface enclosing the effective medium `medium` and
+/// returns the context whose distance is the mesh's own distance tree (MeshDistance: the VPT ->
+/// DA switch asks `ball_inside(x, d_DA)`, i.e. "no triangle within d_DA and x inside", Meng15
+/// Sec. 5's kD-tree search). The aggregate is `GranularAggregate<MeshBoundary>` over the same
+/// mesh in the same frame (anchor tile 0). Throws grainlight::invalid_argument for a mesh that
+/// is not closed and outward-oriented (MeshDistance / MeshBoundary checks) or a bad medium.
+template <class SceneT, std::floating_point F>
+[[nodiscard]] HybridContext<MeshDistance> add_mesh_boundary(SceneT& scene_vpt, const TriangleMesh<F>& mesh, int medium,
+                                                            const HybridDiffusion* diffusion = nullptr) {
+    using SF = typename SceneT::Float;
+    MeshDistance dist(mesh);
+    TriangleMesh<SF> m;
+    m.vertices.reserve(mesh.vertices.size());
+    for (const auto& v : mesh.vertices) m.vertices.emplace_back(Vec3<SF>(v));
+    m.triangles = mesh.triangles;
+    m.compute_face_normals();
+    const int shape = scene_vpt.add_shape(MeshShape<SF>(m), SceneT::MaterialT::index_matched(), medium, -1);
+    return HybridContext<MeshDistance>{medium, shape, std::move(dist), diffusion};
+}
+
 /// Counters of a path / bundle.
 struct HybridCounters {
     std::uint64_t paths = 0;         ///< camera paths
@@ -247,6 +305,7 @@ struct HybridCounters {
     std::uint64_t switch_depth = 0;  ///< sum of grain interactions in EPT before the switch
     std::uint64_t da = 0;            ///< DA connections
     std::uint64_t grain_rays = 0;    ///< Algorithm 1 traversals
+    /// Add another set of counters.
     void merge(const HybridCounters& o) noexcept {
         paths += o.paths;
         switched += o.switched;
@@ -280,7 +339,7 @@ struct HybridVptCallbacks {
     bool on_scatter(PathState<F, S>& st, const Interaction<F, S>& it, const M& m) noexcept {
         if (da_enabled && st.medium == ctx.medium) {
             const Vec3d x(it.p);
-            if (ctx.distance(x) >= ctx.diffusion->d_DA) {
+            if (ball_inside(ctx.distance, x, ctx.diffusion->d_DA)) {
                 da_pending = true;
                 da_x = x;
                 return false;
@@ -339,54 +398,27 @@ template <LitScene Scene, class Distance>
     return true;
 }
 
-/// The high-order part of a path after the switch: from the grain hit x (direction of arrival d,
-/// throughput beta) in the effective medium `ctx.medium` of `scene_vpt`: the grain interaction
-/// becomes a scattering event of the effective medium (albedo, NEE, phase sampling), then VPT,
-/// and (HybridMode::ept_vpt_da) DA connections deep inside. Returns the radiance; counts DA
-/// connections in `counters`.
+namespace detail {
+
+/// The VPT walk of `st` with DA restarts (HybridVptCallbacks): walks while `walk_on`, and at
+/// every pending DA vertex makes a diffusion connection (sample_diffusion_connection), gathers
+/// at the boundary point like a white Lambertian vertex and walks on out of the medium.
+/// Returns the radiance; `*da_part` (if given) receives the part gathered after the first DA
+/// connection (Meng15 Fig. 12's DA contribution).
 template <LitScene Scene, class Distance>
     requires PhaseMedium<typename Scene::Medium>
-[[nodiscard]] typename Scene::Spectrum hybrid_vpt_continuation(const Scene& scene_vpt, const HybridContext<Distance>& ctx,
-                                                               const Vec3d& x, const Vec3d& d,
-                                                               const typename Scene::Spectrum& beta, Rng& rng,
-                                                               const HybridOptions& opt,
-                                                               HybridCounters* counters = nullptr) noexcept {
+[[nodiscard]] typename Scene::Spectrum hybrid_walk_with_da(const Scene& scene_vpt, const HybridContext<Distance>& ctx,
+                                                           HybridVptCallbacks<Scene, Distance>& cb,
+                                                           PathState<typename Scene::Float, typename Scene::Spectrum>& st,
+                                                           bool walk_on, Rng& rng, const HybridOptions& opt,
+                                                           const WalkOptions<typename Scene::Float>& wopt,
+                                                           HybridCounters* counters,
+                                                           typename Scene::Spectrum* da_part) noexcept {
     using F = typename Scene::Float;
     using S = typename Scene::Spectrum;
-    using M = typename Scene::Medium;
     constexpr F inf = std::numeric_limits<F>::infinity();
-    const M& m = scene_vpt.medium(ctx.medium);
-    detail::HybridVptCallbacks<Scene, Distance> cb{VptCallbacks<Scene>{scene_vpt, rng, opt.vpt}, ctx};
-    cb.da_enabled = opt.mode == HybridMode::ept_vpt_da && ctx.diffusion != nullptr;
-    WalkOptions<F> wopt;
-    wopt.max_depth = opt.vpt.max_depth;
-    wopt.rr_depth = opt.vpt.rr_depth;
-    wopt.mode = TransportMode::radiance;
-
-    PathState<F, S> st = start_path<F, S>(Ray<F>(Vec3<F>(x), Vec3<F>(d)), ctx.medium, beta);
-    if constexpr (requires { m.albedo(); }) st.throughput *= m.albedo();
-    Interaction<F, S> it;
-    it.kind = EventKind::scatter;
-    it.p = Vec3<F>(x);
-    it.nee = NeeKind::phase;
-    st.depth = 1;
-    bool walk_on = true;
-    if (cb.da_enabled && ctx.distance(x) >= ctx.diffusion->d_DA) {  // test in double precision
-        cb.da_pending = true;
-        cb.da_x = x;
-        walk_on = false;
-    } else {
-        walk_on = cb.on_scatter(st, it, m);
-    }
-    if (walk_on) {
-        const auto ps = m.phase().sample(Vec3<F>(d), rng.uniform2<F>());
-        if (!ps) return cb.vpt.L;
-        st.throughput *= ps.weight;
-        st.ray = Ray<F>(Vec3<F>(x), ps.w, inf, st.ray.cone);
-        st.specular = false;
-        st.last_pdf = ps.pdf;
-        st.last_p = Vec3<F>(x);
-    }
+    bool any_da = false;
+    S before_da(F(0));
     for (int restarts = 0;; ++restarts) {
         if (walk_on) {
             const WalkEnd e = walk(scene_vpt, st, rng, cb, wopt);
@@ -396,6 +428,10 @@ template <LitScene Scene, class Distance>
         if (!cb.da_pending || restarts >= opt.max_da_restarts) break;
         cb.da_pending = false;
         if (counters) ++counters->da;
+        if (!any_da) {
+            any_da = true;
+            before_da = cb.vpt.L;
+        }
         // DA: move to a boundary point with the diffusion weight, gather there as a white
         // Lambertian vertex (NEE + MIS), leave the medium along a cosine-sampled direction.
         SurfaceHit<F, S> h;
@@ -420,7 +456,86 @@ template <LitScene Scene, class Distance>
         st.last_p = h.p;
         if (++st.depth > wopt.max_depth) break;
     }
+    if (da_part) *da_part = any_da ? S(cb.vpt.L - before_da) : S(F(0));
     return cb.vpt.L;
+}
+
+}  // namespace detail
+
+/// The high-order part of a path after the switch: from the grain hit x (direction of arrival d,
+/// throughput beta) in the effective medium `ctx.medium` of `scene_vpt`: the grain interaction
+/// becomes a scattering event of the effective medium (albedo, NEE, phase sampling), then VPT,
+/// and (modes with DA) DA connections deep inside. Returns the radiance; counts DA connections
+/// in `counters`; `*da_part` (if given) receives the part gathered after the first DA
+/// connection (the DA contribution; the rest is VPT's).
+template <LitScene Scene, class Distance>
+    requires PhaseMedium<typename Scene::Medium>
+[[nodiscard]] typename Scene::Spectrum hybrid_vpt_continuation(const Scene& scene_vpt, const HybridContext<Distance>& ctx,
+                                                               const Vec3d& x, const Vec3d& d,
+                                                               const typename Scene::Spectrum& beta, Rng& rng,
+                                                               const HybridOptions& opt,
+                                                               HybridCounters* counters = nullptr,
+                                                               typename Scene::Spectrum* da_part = nullptr) noexcept {
+    using F = typename Scene::Float;
+    using S = typename Scene::Spectrum;
+    using M = typename Scene::Medium;
+    constexpr F inf = std::numeric_limits<F>::infinity();
+    const M& m = scene_vpt.medium(ctx.medium);
+    detail::HybridVptCallbacks<Scene, Distance> cb{VptCallbacks<Scene>{scene_vpt, rng, opt.vpt}, ctx};
+    cb.da_enabled = hybrid_uses_da(opt.mode) && ctx.diffusion != nullptr;
+    WalkOptions<F> wopt;
+    wopt.max_depth = opt.vpt.max_depth;
+    wopt.rr_depth = opt.vpt.rr_depth;
+    wopt.mode = TransportMode::radiance;
+    if (da_part) *da_part = S(F(0));
+
+    PathState<F, S> st = start_path<F, S>(Ray<F>(Vec3<F>(x), Vec3<F>(d)), ctx.medium, beta);
+    if constexpr (requires { m.albedo(); }) st.throughput *= m.albedo();
+    Interaction<F, S> it;
+    it.kind = EventKind::scatter;
+    it.p = Vec3<F>(x);
+    it.nee = NeeKind::phase;
+    st.depth = 1;
+    bool walk_on = true;
+    if (cb.da_enabled && ball_inside(ctx.distance, x, ctx.diffusion->d_DA)) {  // test in double precision
+        cb.da_pending = true;
+        cb.da_x = x;
+        walk_on = false;
+    } else {
+        walk_on = cb.on_scatter(st, it, m);
+    }
+    if (walk_on) {
+        const auto ps = m.phase().sample(Vec3<F>(d), rng.uniform2<F>());
+        if (!ps) return cb.vpt.L;
+        st.throughput *= ps.weight;
+        st.ray = Ray<F>(Vec3<F>(x), ps.w, inf, st.ray.cone);
+        st.specular = false;
+        st.last_pdf = ps.pdf;
+        st.last_p = Vec3<F>(x);
+    }
+    return detail::hybrid_walk_with_da(scene_vpt, ctx, cb, st, walk_on, rng, opt, wopt, counters, da_part);
+}
+
+/// A camera path of the VPT-only modes (HybridMode::vpt, vpt_da; Meng15 Fig. 11's "VPT" and
+/// "VPT+DA"): `ray` starts in vacuum (medium -1) in `scene_vpt` and enters the effective medium
+/// through the index-matched boundary; VPT with DA connections deep inside when the mode has
+/// DA. Returns the radiance; `*da_part` as in hybrid_vpt_continuation.
+template <LitScene Scene, class Distance>
+    requires PhaseMedium<typename Scene::Medium>
+[[nodiscard]] typename Scene::Spectrum hybrid_vpt_camera_path(const Scene& scene_vpt, const HybridContext<Distance>& ctx,
+                                                              const Ray<typename Scene::Float>& ray, Rng& rng,
+                                                              const HybridOptions& opt, HybridCounters* counters = nullptr,
+                                                              typename Scene::Spectrum* da_part = nullptr) noexcept {
+    using F = typename Scene::Float;
+    using S = typename Scene::Spectrum;
+    detail::HybridVptCallbacks<Scene, Distance> cb{VptCallbacks<Scene>{scene_vpt, rng, opt.vpt}, ctx};
+    cb.da_enabled = hybrid_uses_da(opt.mode) && ctx.diffusion != nullptr;
+    WalkOptions<F> wopt;
+    wopt.max_depth = opt.vpt.max_depth;
+    wopt.rr_depth = opt.vpt.rr_depth;
+    wopt.mode = TransportMode::radiance;
+    PathState<F, S> st = start_path<F, S>(ray, -1);
+    return detail::hybrid_walk_with_da(scene_vpt, ctx, cb, st, true, rng, opt, wopt, counters, da_part);
 }
 
 /// Radiance (mean over directions, as seen by a scattering vertex) at an interior point x
@@ -443,7 +558,7 @@ template <LitScene Scene, class Distance>
     const auto& m = scene_vpt.medium(ctx.medium);
     if constexpr (requires { m.albedo(); })
         for (std::size_t c = 0; c < S::size; ++c) beta[c] = m.albedo()[c] > F(0) ? F(1) / m.albedo()[c] : F(0);
-    if (!(ctx.diffusion && ctx.distance(x) >= ctx.diffusion->d_DA)) return S(F(0));
+    if (!(ctx.diffusion && ball_inside(ctx.distance, x, ctx.diffusion->d_DA))) return S(F(0));
     return hybrid_vpt_continuation(scene_vpt, ctx, x, Vec3d(0, 0, 1), beta, rng, opt);
 }
 
@@ -455,8 +570,9 @@ template <LitScene Scene, class Distance>
 /// the (possibly virtual) switch (high order).
 template <class S>
 struct HybridPathRadiance {
-    S low{0.0f};
-    S high{0.0f};
+    S low{0.0f};            ///< radiance gathered in EPT before the switch
+    S high{0.0f};           ///< radiance gathered after the (possibly virtual) switch
+    S da{0.0f};             ///< the part of `high` gathered after a DA connection
     bool switched = false;  ///< switched (or, in mode ept, reached the would-be switch)
     int switch_order = 0;   ///< grain interactions in EPT before the switch
 };
@@ -464,19 +580,27 @@ struct HybridPathRadiance {
 /// A bundle's result: per-path radiances and the CPU seconds of the two parts.
 template <class S, int NMax = 64>
 struct HybridBundleResult {
-    std::array<HybridPathRadiance<S>, NMax> path{};
-    int n = 0;
-    double seconds_low = 0, seconds_high = 0;
-    HybridCounters counters{};
+    std::array<HybridPathRadiance<S>, NMax> path{};  ///< per-path radiances (first n used)
+    int n = 0;                                       ///< paths in the bundle
+    double seconds_low = 0;                          ///< steady-clock seconds of the EPT part
+    double seconds_high = 0;                         ///< steady-clock seconds of the part after the switch
+    HybridCounters counters{};                       ///< switch / DA counters
     /// Mean over the bundle's paths of the low / high / total radiance.
     [[nodiscard]] S mean_low() const noexcept {
         S s(typename S::value_type(0));
         for (int i = 0; i < n; ++i) s += path[std::size_t(i)].low;
         return s / typename S::value_type(n);
     }
+    /// Mean over the bundle's paths of the high-order radiance.
     [[nodiscard]] S mean_high() const noexcept {
         S s(typename S::value_type(0));
         for (int i = 0; i < n; ++i) s += path[std::size_t(i)].high;
+        return s / typename S::value_type(n);
+    }
+    /// Mean over the bundle's paths of the DA part of the high-order radiance.
+    [[nodiscard]] S mean_da() const noexcept {
+        S s(typename S::value_type(0));
+        for (int i = 0; i < n; ++i) s += path[std::size_t(i)].da;
         return s / typename S::value_type(n);
     }
 };
@@ -519,6 +643,15 @@ template <LitScene Scene, BoundaryShape Shape, class Distance>
     bool armed = false;
     double t_high = 0;
     const auto t0 = opt.measure_time ? Clock::now() : Clock::time_point{};
+    if (!hybrid_uses_ept(opt.mode)) {
+        // Fig. 11's VPT and VPT+DA: no grains; the whole path is the "high-order" part.
+        for (int i = 0; i < n; ++i) {
+            auto& path = res.path[std::size_t(i)];
+            path.high = hybrid_vpt_camera_path(scene_vpt, ctx, rays[i], rngs[i], opt, &res.counters, &path.da);
+        }
+        if (opt.measure_time) res.seconds_high = std::chrono::duration<double>(Clock::now() - t0).count();
+        return res;
+    }
     int alive = n;
     std::array<Vec3d, 64> xs;
     while (alive > 0) {
@@ -555,8 +688,10 @@ template <LitScene Scene, BoundaryShape Shape, class Distance>
                 res.counters.switch_depth += std::uint64_t(res.path[std::size_t(i)].switch_order);
                 const S beta = q.beta / typename S::value_type(opt.acceptance);
                 const auto th0 = opt.measure_time ? Clock::now() : Clock::time_point{};
+                S da_part(0.0f);
                 res.path[std::size_t(i)].high +=
-                    hybrid_vpt_continuation(scene_vpt, ctx, x_switch, q.d, beta, rng, opt, &res.counters);
+                    hybrid_vpt_continuation(scene_vpt, ctx, x_switch, q.d, beta, rng, opt, &res.counters, &da_part);
+                res.path[std::size_t(i)].da += da_part;
                 if (opt.measure_time) t_high += std::chrono::duration<double>(Clock::now() - th0).count();
             }
         }
@@ -595,22 +730,49 @@ template <LitScene Scene, BoundaryShape Shape, class Distance>
 /// Result of a hybrid render: low-order (EPT) and high-order (after the switch) images, the
 /// per-pixel variance statistics of the bundle samples and the CPU time of the two parts.
 struct HybridImages {
-    Film low, high;
+    /// low: the EPT part (Fig. 12's EPT contribution); high: everything after the switch (VPT +
+    /// DA; in the VPT-only modes the whole image).
+    Film low;
+    Film high;  ///< see `low`
+    /// The part of `high` gathered after a DA connection (Fig. 12's DA contribution).
+    Film da;
     /// Per pixel: mean number of EPT grain interactions before the switch over the paths that
     /// switched (0 where none did), in all three channels (Meng15 Fig. 12's switch-depth view).
     Image switch_depth;
     int spp = 0;                    ///< bundles per pixel
     double var_total = 0;           ///< mean over pixels of the sample variance of one bundle estimate (channel mean)
-    double var_low = 0, var_high = 0;
+    double var_low = 0;   ///< the same for the low-order (EPT) part
+    double var_high = 0;  ///< the same for the high-order part
     double m2_high = 0;             ///< mean over pixels of the second moment E[H^2] of the high-order part
-    double cpu_seconds_low = 0, cpu_seconds_high = 0;  ///< thread CPU seconds, summed over threads
-    HybridCounters counters{};
+    /// Standard error of var_total (spread of the per-pixel variances over the pixels / sqrt(pixels)).
+    double var_total_se = 0;
+    /// Per pixel: sample variance of one bundle estimate, total / low / high order (channels 0-2).
+    Image pixel_variance;
+    /// Per pixel: E[H^2] of the high-order part of one bundle estimate (channel 0).
+    Image pixel_m2_high;
+    double cpu_seconds_low = 0;   ///< thread CPU seconds of the low-order part, summed over threads
+    double cpu_seconds_high = 0;  ///< the same for the high-order part
+    HybridCounters counters{};    ///< switch / DA counters of the render
+    HybridMode mode = HybridMode::ept_vpt;  ///< the techniques of the render
+    /// The image: low + high.
     [[nodiscard]] Image combined() const {
         Image a = low.image();
         const Image b = high.image();
         for (std::size_t i = 0; i < a.rgb.size(); ++i) a.rgb[i] += b.rgb[i];
         return a;
     }
+    /// Fig. 12's per-technique contributions: EPT (low; in mode ept the whole image).
+    [[nodiscard]] Image ept_image() const { return mode == HybridMode::ept ? combined() : low.image(); }
+    /// VPT's contribution: high order minus the DA part (0 in mode ept).
+    [[nodiscard]] Image vpt_image() const {
+        if (mode == HybridMode::ept) return Image(high.width(), high.height());
+        Image a = high.image();
+        const Image b = da.image();
+        for (std::size_t i = 0; i < a.rgb.size(); ++i) a.rgb[i] -= b.rgb[i];
+        return a;
+    }
+    /// DA's contribution.
+    [[nodiscard]] Image da_image() const { return da.image(); }
     /// CPU seconds per bundle sample per pixel (the time of a 1-spp image).
     [[nodiscard]] double seconds_per_spp() const noexcept {
         return spp > 0 ? (cpu_seconds_low + cpu_seconds_high) / double(spp) : 0.0;
@@ -638,22 +800,30 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
     check_argument(threads >= 0, "render_hybrid", "threads", threads, ">= 0");
     check_argument(stride >= 1, "render_hybrid", "stride", stride, ">= 1");
     opt.validate("render_hybrid");
-    check_argument(opt.mode != HybridMode::ept_vpt_da || ctx.diffusion != nullptr, "render_hybrid", "ctx.diffusion",
-                   "null", "a HybridDiffusion for mode ept_vpt_da");
+    check_argument(!hybrid_uses_da(opt.mode) || ctx.diffusion != nullptr, "render_hybrid", "ctx.diffusion",
+                   "null", "a HybridDiffusion for the modes with DA (ept_vpt_da, vpt_da)");
     check_argument(ctx.medium >= 0, "render_hybrid", "ctx.medium", ctx.medium, ">= 0");
     using F = typename Camera::Float;
     using S = typename Scene::Spectrum;
     check_material_channels(agg, S::size, "render_hybrid");
-    if (opt.mode == HybridMode::ept_vpt_da)
+    if (hybrid_uses_da(opt.mode))
         check_argument(ctx.diffusion->compatible_with(S::size), "render_hybrid", "ctx.diffusion channels",
                        ctx.diffusion->channel.size(), "1 (grey) or " + std::to_string(S::size) + " (the spectrum's channels)");
     opt.measure_time = true;
     const int W = camera.width(), H = camera.height();
     const int w = (W + stride - 1) / stride, h = (H + stride - 1) / stride;
     const int N = opt.bundle_size;
-    HybridImages img{Film(w, h), Film(w, h), Image(w, h), spp};
+    HybridImages img;
+    img.low = Film(w, h);
+    img.high = Film(w, h);
+    img.da = Film(w, h);
+    img.switch_depth = Image(w, h);
+    img.spp = spp;
+    img.mode = opt.mode;
+    img.pixel_variance = Image(w, h);
+    img.pixel_m2_high = Image(w, h);
     struct RowStats {
-        double var_t = 0, var_l = 0, var_h = 0, m2_h = 0, sec_l = 0, sec_h = 0;
+        double var_t = 0, var_t2 = 0, var_l = 0, var_h = 0, m2_h = 0, sec_l = 0, sec_h = 0;
         HybridCounters c{};
     };
     std::vector<RowStats> rows(static_cast<std::size_t>(h));
@@ -684,11 +854,16 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
                         depth_sum += double(b.path[std::size_t(i)].switch_order);
                         depth_n += 1;
                     }
-                S lo = b.mean_low(), hi = b.mean_high();
+                S lo = b.mean_low(), hi = b.mean_high(), da = b.mean_da();
                 if (!lo.is_finite()) lo = S(0.0f);
-                if (!hi.is_finite()) hi = S(0.0f);
+                if (!hi.is_finite()) {
+                    hi = S(0.0f);
+                    da = S(0.0f);
+                }
+                if (!da.is_finite()) da = S(0.0f);
                 img.low.add_sample(x, y, lo);
                 img.high.add_sample(x, y, hi);
+                img.da.add_sample(x, y, da);
                 wl.add(double(lo.average()));
                 wh.add(double(hi.average()));
                 wt.add(double(lo.average()) + double(hi.average()));
@@ -697,9 +872,14 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
                 rs.c.merge(b.counters);
             }
             rs.var_t += wt.variance();
+            rs.var_t2 += wt.variance() * wt.variance();
             rs.var_l += wl.variance();
             rs.var_h += wh.variance();
             rs.m2_h += wh.variance() + wh.mean() * wh.mean();
+            img.pixel_variance.at(x, y, 0) = float(wt.variance());
+            img.pixel_variance.at(x, y, 1) = float(wl.variance());
+            img.pixel_variance.at(x, y, 2) = float(wh.variance());
+            img.pixel_m2_high.at(x, y, 0) = float(wh.variance() + wh.mean() * wh.mean());
             for (int c = 0; c < 3; ++c) img.switch_depth.at(x, y, c) = depth_n > 0 ? float(depth_sum / depth_n) : 0.0f;
         }
         // The row's thread CPU time, split between the two parts in the ratio of their
@@ -710,7 +890,9 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
         rs.sec_h = wall > 0 ? cpu * wall_h / wall : 0.0;
         progress(1);
     }
+    double var_t2 = 0;
     for (const RowStats& rs : rows) {
+        var_t2 += rs.var_t2;
         img.var_total += rs.var_t;
         img.var_low += rs.var_l;
         img.var_high += rs.var_h;
@@ -721,6 +903,7 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
     }
     const double np = double(w) * double(h);
     img.var_total /= np;
+    img.var_total_se = np > 1 ? std::sqrt(std::max(0.0, var_t2 / np - img.var_total * img.var_total) / (np - 1)) : 0.0;
     img.var_low /= np;
     img.var_high /= np;
     img.m2_high /= np;
@@ -731,14 +914,99 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
 /// high-order parts of one bundle sample), t_L, t_H (CPU seconds of the two parts per bundle
 /// sample per pixel) and P_a of Eq. 8.
 struct AcceptanceEstimate {
-    double V_L = 0, V_H = 0, t_L = 0, t_H = 0;
+    double V_L = 0;  ///< variance of the low-order part of one sample
+    double V_H = 0;  ///< variance of the high-order part of one sample
+    double t_L = 0;  ///< CPU seconds of the low-order part per sample
+    double t_H = 0;  ///< CPU seconds of the high-order part per sample
     double P_a = 1;  ///< Eq. 8 (Meng15)
     /// Eq. 8 with the exact variance of the roulette estimator L + H 1{u < P_a} / P_a:
     /// Var = (V - E[H^2]) + E[H^2] / P_a (V = total variance at P_a = 1), i.e. Eq. 8 with
     /// V_L -> V - E[H^2], V_H -> E[H^2]. Eq. 6 neglects (1 / P_a - 1) E[H]^2 and the low/high
     /// covariance; this one does not.
     double P_a_moments = 1;
+    /// The acceptance that never loses (what render drivers should use; docs/meng15_hybrid.md):
+    /// P_a_robust below when its predicted gain is resolved, i.e. gain - 2 gain_se > 1, else 1.
+    double P_a_safe = 1;
+    /// Eq. 8, moments form, on robust preview moments: the preview pixels are split into 8
+    /// interleaved groups and V, E[H^2] are the means of the group means without the largest
+    /// and the smallest (one glint in one pixel cannot dominate).
+    double P_a_robust = 1;
+    double gain = 1;     ///< predicted ttuv(P_a = 1) / ttuv(P_a_robust) (exact roulette variance x Eq. 7)
+    double gain_se = 0;  ///< its jackknife standard error over the 8 groups
+    double V_robust = 0;   ///< robust total variance V of one sample at P_a = 1
+    double M_robust = 0;   ///< robust E[H^2] of one sample (P_a_robust = Eq. 8 with V_L = V - M, V_H = M)
 };
+
+/// The robust and the safe acceptance (AcceptanceEstimate::P_a_robust, P_a_safe, gain,
+/// gain_se) from a preview rendered at P_a = 1 (its per-pixel variances) and the per-sample
+/// costs t_L, t_H of its two parts. Fills those four fields of `a`.
+inline void robust_acceptance(const HybridImages& pv, double t_L, double t_H, AcceptanceEstimate& a,
+                              double p_min = 1.0 / 64.0) {
+    constexpr int G = 8;
+    const int w = pv.pixel_variance.width, h = pv.pixel_variance.height;
+    std::array<double, G> V{}, M{}, n{};
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const int g = (x + 3 * y) % G;
+            V[std::size_t(g)] += double(pv.pixel_variance.at(x, y, 0));
+            M[std::size_t(g)] += double(pv.pixel_m2_high.at(x, y, 0));
+            n[std::size_t(g)] += 1;
+        }
+    int groups = 0;
+    for (int g = 0; g < G; ++g)
+        if (n[std::size_t(g)] > 0) {
+            V[std::size_t(groups)] = V[std::size_t(g)] / n[std::size_t(g)];
+            M[std::size_t(groups)] = M[std::size_t(g)] / n[std::size_t(g)];
+            ++groups;
+        }
+    a.P_a_robust = a.P_a_safe = 1;
+    a.gain = 1;
+    a.gain_se = 0;
+    if (groups < 4 || !(t_L > 0) || !(t_H > 0)) return;
+    // Mean of the group values without the largest and the smallest (of V; M follows its group).
+    auto trimmed = [&](int skip, double& v, double& m) {
+        int lo = -1, hi = -1;
+        for (int g = 0; g < groups; ++g) {
+            if (g == skip) continue;
+            if (lo < 0 || V[std::size_t(g)] < V[std::size_t(lo)]) lo = g;
+            if (hi < 0 || V[std::size_t(g)] > V[std::size_t(hi)]) hi = g;
+        }
+        v = m = 0;
+        int k = 0;
+        for (int g = 0; g < groups; ++g) {
+            if (g == skip || g == lo || g == hi) continue;
+            v += V[std::size_t(g)];
+            m += M[std::size_t(g)];
+            ++k;
+        }
+        v /= std::max(1, k);
+        m /= std::max(1, k);
+    };
+    auto gain_at = [&](double v, double m, double P) {
+        const double p1 = predicted_ttuv(v - m, m, t_L, t_H, 1.0), pp = predicted_ttuv(v - m, m, t_L, t_H, P);
+        return pp > 0 ? p1 / pp : 1.0;
+    };
+    double v, m;
+    trimmed(-1, v, m);
+    a.V_robust = v;
+    a.M_robust = m;
+    a.P_a_robust = optimal_acceptance(v - m, m, t_L, t_H, p_min);
+    a.gain = gain_at(v, m, a.P_a_robust);
+    // Jackknife over the groups.
+    std::array<double, G> gj{};
+    double gm = 0;
+    for (int g = 0; g < groups; ++g) {
+        double vj, mj;
+        trimmed(g, vj, mj);
+        gj[std::size_t(g)] = gain_at(vj, mj, a.P_a_robust);
+        gm += gj[std::size_t(g)];
+    }
+    gm /= double(groups);
+    double ss = 0;
+    for (int g = 0; g < groups; ++g) ss += (gj[std::size_t(g)] - gm) * (gj[std::size_t(g)] - gm);
+    a.gain_se = std::sqrt(double(groups - 1) / double(groups) * ss);
+    a.P_a_safe = a.gain - 2.0 * a.gain_se > 1.0 ? a.P_a_robust : 1.0;
+}
 
 /// Estimate the optimal acceptance probability (Eq. 8) from a preview render of every
 /// `stride`-th pixel (10: Meng15's 1%-size image) with P_a = 1 and the same spp.
@@ -759,6 +1027,7 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera>
     a.t_H = pv.cpu_seconds_high / np;
     a.P_a = optimal_acceptance(a.V_L, a.V_H, a.t_L, a.t_H);
     a.P_a_moments = optimal_acceptance(pv.var_total - pv.m2_high, pv.m2_high, a.t_L, a.t_H);
+    robust_acceptance(pv, a.t_L, a.t_H, a);
     return a;
 }
 

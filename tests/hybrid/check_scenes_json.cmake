@@ -1,0 +1,37 @@
+# Checker for meng15_table2_ttuv: the last stdout line is a JSON object whose "scenes" member maps
+# each scene of SCENES to an object holding every key of KEYS as a finite number; every CHECKS
+# entry (an awk boolean expression over those keys, plus abs()) must hold for every scene.
+# Usage: cmake -DEXE=.. "-DARGS=a;b" "-DSCENES=s1;s2" "-DKEYS=k1;k2" "-DCHECKS=e1;e2" -P check_scenes_json.cmake
+execute_process(COMMAND ${EXE} ${ARGS} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "${EXE} exited with ${rc}: ${err}")
+endif()
+string(STRIP "${out}" out)
+string(REGEX REPLACE ".*\n" "" last "${out}")
+string(JSON type ERROR_VARIABLE jerr TYPE "${last}" scenes)
+if(NOT jerr STREQUAL "NOTFOUND" OR NOT type STREQUAL "OBJECT")
+  message(FATAL_ERROR "last stdout line has no \"scenes\" object: '${last}' (${jerr})")
+endif()
+foreach(scene IN LISTS SCENES)
+  set(awk_vars)
+  foreach(key IN LISTS KEYS)
+    string(JSON type ERROR_VARIABLE jerr TYPE "${last}" scenes ${scene} ${key})
+    if(NOT jerr STREQUAL "NOTFOUND" OR NOT type STREQUAL "NUMBER")
+      message(FATAL_ERROR "scenes.${scene}.${key} is not a number (${type} ${jerr}): ${last}")
+    endif()
+    string(JSON v GET "${last}" scenes ${scene} ${key})
+    if(NOT v MATCHES "^-?[0-9]")
+      message(FATAL_ERROR "scenes.${scene}.${key} = ${v} is not finite")
+    endif()
+    list(APPEND awk_vars -v "${key}=${v}")
+  endforeach()
+  foreach(expr IN LISTS CHECKS)
+    execute_process(COMMAND awk ${awk_vars}
+                            "function abs(x) { return x < 0 ? -x : x } BEGIN { exit (${expr}) ? 0 : 1 }"
+                    RESULT_VARIABLE ok ERROR_VARIABLE awk_err)
+    if(NOT ok EQUAL 0)
+      message(FATAL_ERROR "check failed for ${scene}: ${expr} ${awk_err}\nJSON: ${last}")
+    endif()
+    message(STATUS "ok ${scene}: ${expr}")
+  endforeach()
+endforeach()
