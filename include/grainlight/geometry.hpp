@@ -9,6 +9,7 @@
 #include "grainlight/geometry/grain.hpp"
 #include "grainlight/geometry/grain_walk.hpp"
 #include "grainlight/geometry/grains.hpp"
+#include "grainlight/geometry/procedural_boundaries.hpp"
 #include "grainlight/geometry/sphere.hpp"
 #include "grainlight/geometry/transform.hpp"
 #include "grainlight/geometry/triangle_mesh.hpp"

@@ -855,12 +855,20 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
                         depth_n += 1;
                     }
                 S lo = b.mean_low(), hi = b.mean_high(), da = b.mean_da();
-                if (!lo.is_finite()) lo = S(0.0f);
+                // Non-finite bundle means are counted per pixel (Film::nonfinite_samples), then zeroed.
+                if (!lo.is_finite()) {
+                    img.low.add_nonfinite(x, y);
+                    lo = S(0.0f);
+                }
                 if (!hi.is_finite()) {
+                    img.high.add_nonfinite(x, y);
                     hi = S(0.0f);
                     da = S(0.0f);
                 }
-                if (!da.is_finite()) da = S(0.0f);
+                if (!da.is_finite()) {
+                    img.da.add_nonfinite(x, y);
+                    da = S(0.0f);
+                }
                 img.low.add_sample(x, y, lo);
                 img.high.add_sample(x, y, hi);
                 img.da.add_sample(x, y, da);
