@@ -250,7 +250,10 @@ int main(int argc, char** argv) {
                     const gl::Vec2f u = rng.uniform2<float>();
                     const auto ray = camera.generate_ray(float(x) + u.x, float(y) + u.y);
                     gl::RGB L = embree_radiance(w, lib, agg, ray, rng, opt, row_rays[std::size_t(y)]);
-                    if (!L.is_finite()) L = gl::RGB(0.0f);
+                    if (!L.is_finite()) {  // counted and reported, never poisoning the pixel
+                        film.add_nonfinite(x, y);
+                        L = gl::RGB(0.0f);
+                    }
                     film.add_sample(x, y, L);
                     row_sum[std::size_t(y)] += L[1];
                     row_sq[std::size_t(y)] += double(L[1]) * L[1];
@@ -297,6 +300,8 @@ int main(int argc, char** argv) {
             .num("mean_embree", mean)
             .num("mean_embree_se", se)
             .num("mean_library", lib_mean)
+            .integer("nonfinite_samples", (long long)(film.nonfinite_samples() + ref.low.nonfinite_samples() +
+                                                      ref.high.nonfinite_samples()))
             .num("seconds_embree", t_embree)
             .num("seconds_library", t_lib)
             .num("rays_per_second", double(rays) / t_embree)
