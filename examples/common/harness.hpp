@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <type_traits>
@@ -62,6 +63,34 @@ public:
     T opt(const std::string& name, T quick, T full, const std::string& help) {
         cli_.option(name, help, show(quick) + " quick, " + show(full) + " full");
         return get<T>(name, full_quality() ? full : quick);
+    }
+
+    /// A typed option without a default: declared for --help, parsed when given, std::nullopt
+    /// when absent (for options such as "--x or --radius-um"). `show_default` only documents.
+    template <class T>
+    std::optional<T> opt_optional(const std::string& name, const std::string& help,
+                                  const std::string& show_default = "") {
+        cli_.option(name, help, show_default);
+        if (!cli_.has(name)) return std::nullopt;
+        return get<T>(name, T{});
+    }
+    /// Whether `--name` was given on the command line.
+    [[nodiscard]] bool given(const std::string& name) const { return cli_.has(name); }
+    /// The text given for `--name` ("" when absent), for messages that quote the argument.
+    [[nodiscard]] std::string given_text(const std::string& name) const { return cli_.str(name); }
+
+    /// What --out names: a directory (created by ready(), default "out") or a file the example
+    /// writes itself (not created; empty when --out is absent).
+    enum class OutKind { directory, file };
+    /// ready() for examples whose --out names a file (OutKind::file): out() is then the path
+    /// given, or empty. ready(OutKind::directory) is ready().
+    void ready(OutKind kind) {
+        if (kind == OutKind::directory) return ready();
+        cli_.finish();
+        full_ = cli_.full_quality();
+        seed_ = cli_.seed();
+        threads_ = cli_.threads();
+        out_ = cli_.str("out", "");
     }
 
     /// Call after the last opt(): prints --help (and exits) or rejects unknown options, then
