@@ -63,7 +63,7 @@ int main(int argc, char** argv) {
             ex.opt<double>("shell-rmax", 8.0, "shells: cap of the largest radius (the slab caps it at B/2)");
         const std::uint64_t shell_rank = ex.opt<std::uint64_t>("shell-rank", 5, "shells: NMF terms");
         const std::uint64_t shell_knn = ex.opt<std::uint64_t>("shell-knn", 32, "shells: k of the k-NN density estimate");
-        ex.ready();
+        ex.ready(gl_examples::Example::OutKind::optional_directory);  // DIR/slab.csv only when --out is given
 
         if (paths < 2) throw cli_error("--paths = " + std::to_string(paths) + " must be >= 2");
         const std::uint64_t seed = ex.seed();

@@ -79,18 +79,21 @@ public:
     /// The text given for `--name` ("" when absent), for messages that quote the argument.
     [[nodiscard]] std::string given_text(const std::string& name) const { return cli_.str(name); }
 
-    /// What --out names: a directory (created by ready(), default "out") or a file the example
-    /// writes itself (not created; empty when --out is absent).
-    enum class OutKind { directory, file };
-    /// ready() for examples whose --out names a file (OutKind::file): out() is then the path
-    /// given, or empty. ready(OutKind::directory) is ready().
+    /// What --out names: a directory (created by ready(), default "out"), a directory written
+    /// only when --out is given (created then; out() empty otherwise), or a file the example
+    /// writes itself (not created; out() empty when --out is absent).
+    enum class OutKind { directory, optional_directory, file };
+    /// ready() with the meaning of --out; ready(OutKind::directory) is ready().
     void ready(OutKind kind) {
         if (kind == OutKind::directory) return ready();
         cli_.finish();
         full_ = cli_.full_quality();
         seed_ = cli_.seed();
         threads_ = cli_.threads();
-        out_ = cli_.str("out", "");
+        if (kind == OutKind::optional_directory && cli_.has("out"))
+            out_ = cli_.out_dir(default_out());
+        else
+            out_ = cli_.str("out", "");
     }
 
     /// Call after the last opt(): prints --help (and exits) or rejects unknown options, then
