@@ -47,9 +47,13 @@ namespace gl_examples {
 class Example {
 public:
     Example(int argc, char** argv, std::string program, std::string summary)
-        : cli_(argc, argv, program, std::move(summary)), program_(std::move(program)) {
+        : Example(argc, argv, std::move(program), std::move(summary), "out") {}
+    /// As above with another default for --out (e.g. "out/<example>").
+    Example(int argc, char** argv, std::string program, std::string summary, std::string default_out)
+        : cli_(argc, argv, program, std::move(summary)), program_(std::move(program)),
+          default_out_(std::move(default_out)) {
         for (int i = 0; i < argc; ++i) command_ += (i ? " " : "") + std::string(argv[i]);
-        cli_.common_options(default_out());
+        cli_.common_options(default_out_);
     }
 
     /// A typed option with one default: declared for --help, defaulted and parsed in one line.
@@ -133,6 +137,11 @@ public:
         return p;
     }
 
+    /// A progress bar for work that parallel() does not run (serial stages, library callbacks).
+    [[nodiscard]] ProgressBar progress(const std::string& label, std::uint64_t total) const {
+        return ProgressBar(label, total);
+    }
+
     /// The JSON summary, pre-filled with what reproduces the run.
     [[nodiscard]] Json summary() const {
         Json j;
@@ -184,7 +193,7 @@ public:
     }
 
 private:
-    static std::string default_out() { return "out"; }
+    std::string default_out() const { return default_out_; }
     bool full_quality() const { return cli_.full_quality(); }
     template <class T>
     static std::string show(const T& v) {
@@ -219,7 +228,7 @@ private:
         }
     }
     Cli cli_;
-    std::string program_, command_;
+    std::string program_, command_, default_out_ = "out";
     bool full_ = false;
     std::uint64_t seed_ = 1;
     int threads_ = 1;
@@ -232,6 +241,15 @@ template <class Body>
 int run(int argc, char** argv, const char* program, const char* summary, Body&& body) {
     return run_main(program, [&]() {
         Example ex(argc, argv, program, summary);
+        return body(ex);
+    });
+}
+
+/// As above, with another default for --out than "out".
+template <class Body>
+int run(int argc, char** argv, const char* program, const char* summary, const char* default_out, Body&& body) {
+    return run_main(program, [&]() {
+        Example ex(argc, argv, program, summary, default_out);
         return body(ex);
     });
 }
