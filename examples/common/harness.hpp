@@ -52,7 +52,10 @@ public:
     Example(int argc, char** argv, std::string program, std::string summary, std::string default_out)
         : cli_(argc, argv, program, std::move(summary)), program_(std::move(program)),
           default_out_(std::move(default_out)) {
-        for (int i = 0; i < argc; ++i) command_ += (i ? " " : "") + std::string(argv[i]);
+        for (int i = 0; i < argc; ++i) {
+            if (i) command_ += ' ';
+            command_ += argv[i];
+        }
         cli_.common_options(default_out_);
     }
 
