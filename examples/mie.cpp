@@ -41,7 +41,9 @@ std::string complex_list(const std::vector<std::complex<double>>& v) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    return gl_examples::run(argc, argv, "mie", "Lorenz-Mie / GOA scattering by one sphere (Guo21 Sec. 3)",
+    const gl_examples::OutOption out_option{
+        "", "if given: also write DIR/mie.csv (S1, S2 at 0..180 deg, 0.5-deg steps) and DIR/mie.png"};
+    return gl_examples::run(argc, argv, "mie", "Lorenz-Mie / GOA scattering by one sphere (Guo21 Sec. 3)", out_option,
                             [&](gl_examples::Example& ex) -> int {
         using gl_examples::cli_error;
         const double n = ex.opt<double>("n", 1.5, "real part of the particle index relative to the host (> 0)");
@@ -56,7 +58,6 @@ int main(int argc, char** argv) {
             "method", "mie",
             "mie | goa | auto (auto: GOA from r = 2 um on where GOA is valid, Mie elsewhere; needs --radius-um)");
         const auto p_max = ex.opt<std::uint64_t>("p-max", 3, "highest GOA order p");
-        // --out: if given, also DIR/mie.csv (S1, S2 at 0..180 deg, 0.5-deg steps) and DIR/mie.png.
         ex.ready(gl_examples::Example::OutKind::optional_directory);
 
         if (!(std::isfinite(n) && n > 0)) throw cli_error("--n = " + ex.given_text("n") + " must be a finite number > 0");

@@ -24,8 +24,9 @@
 #include "grainlight/packing.hpp"
 
 int main(int argc, char** argv) {
+    const gl_examples::OutOption out_option{"", "tile FILE to write (grainlight container, kind TILE); none without it"};
     return gl_examples::run(argc, argv, "packing",
-                            "periodic tile of equal spheres by event-driven MD (Skoge et al. 2006), checked",
+                            "periodic tile of equal spheres by event-driven MD (Skoge et al. 2006), checked", out_option,
                             [&](gl_examples::Example& ex) -> int {
         const double fraction = ex.opt<double>("fraction", 0.63, "packing rate in (0, 0.64)");
         const std::uint64_t n = ex.opt<std::uint64_t>("spheres", 2000, "number of spheres in the tile (>= 2)");

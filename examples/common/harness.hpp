@@ -44,6 +44,12 @@
 
 namespace gl_examples {
 
+/// How an example documents --out on --help: its default ("" = none shown) and its help text.
+struct OutOption {
+    std::string default_out;                ///< default of --out ("" for none)
+    std::string help = "output directory";  ///< help line of --out
+};
+
 class Example {
 public:
     Example(int argc, char** argv, std::string program, std::string summary)
@@ -57,6 +63,20 @@ public:
             command_ += argv[i];
         }
         cli_.common_options(default_out_);
+    }
+    /// As above with --out documented by `out` (e.g. an optional directory or a file).
+    Example(int argc, char** argv, std::string program, std::string summary, const OutOption& out)
+        : cli_(argc, argv, program, std::move(summary)), program_(std::move(program)),
+          default_out_(out.default_out.empty() ? "out" : out.default_out) {
+        for (int i = 0; i < argc; ++i) {
+            if (i) command_ += ' ';
+            command_ += argv[i];
+        }
+        // The shared options of Cli::common_options, with this --out line.
+        cli_.option("quality", "quick | full", "quick");
+        cli_.option("out", out.help, out.default_out);
+        cli_.option("seed", "random seed (unsigned integer)", "1");
+        cli_.option("threads", "worker threads (0 = all cores)", "0");
     }
 
     /// A typed option with one default: declared for --help, defaulted and parsed in one line.
@@ -244,6 +264,15 @@ template <class Body>
 int run(int argc, char** argv, const char* program, const char* summary, Body&& body) {
     return run_main(program, [&]() {
         Example ex(argc, argv, program, summary);
+        return body(ex);
+    });
+}
+
+/// As above, with --out documented by `out` (see OutOption).
+template <class Body>
+int run(int argc, char** argv, const char* program, const char* summary, const OutOption& out, Body&& body) {
+    return run_main(program, [&]() {
+        Example ex(argc, argv, program, summary, out);
         return body(ex);
     });
 }
