@@ -17,18 +17,16 @@
 #include <string>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
+#include "common/harness.hpp"
 #include "grainlight/optics/goa.hpp"
 
 int main(int argc, char** argv) {
-    return gl_examples::run_main("guo21_fig11_diffraction_share", [&]() -> int {
-        gl_examples::Cli cli(argc, argv, "guo21_fig11_diffraction_share",
-                             "Guo21 Fig. 11: angular share of energy carried by Fraunhofer diffraction");
-        cli.common_options("out");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const auto out = cli.out_dir();
+    return gl_examples::run(argc, argv, "guo21_fig11_diffraction_share",
+                            "Guo21 Fig. 11: angular share of energy carried by Fraunhofer diffraction",
+                            [&](gl_examples::Example& ex) -> int {
+        ex.ready();
+        const bool full = ex.full();
+        const auto& out = ex.out();
         const double pi = 3.14159265358979323846, lambda = 0.55;
         const std::complex<double> ice(1.31, 0);
         const std::vector<double> radii = {2, 20, 1000};
@@ -77,23 +75,11 @@ int main(int argc, char** argv) {
             for (std::size_t k = 0; k < radii.size(); ++k) row.push_back(share[k][std::size_t(i)]);
             csv.row(row);
         }
-        const auto csv_path = out / "guo21_fig11_diffraction_share.csv";
-        csv.write(csv_path);
-        const auto png = out / "guo21_fig11_diffraction_share.png";
-        gl_examples::plot_with_matplotlib(
-            out / "guo21_fig11_diffraction_share.py",
-            "d = read_csv(r'''" + csv_path.string() + "''')\n"
-            "fig, ax = plt.subplots(1, 3, figsize=(15, 4))\n"
-            "for a, r in zip(ax, [2, 20, 1000]):\n"
-            "    a.semilogx(d['theta_deg'], 100 * np.array(d['share_r%d' % r]), 'b-')\n"
-            "    a.set_ylim(-2, 102); a.set_title('r = %d um' % r); a.set_xlabel('theta [deg]')\n"
-            "ax[0].set_ylabel('diffraction share of energy [%]')\n"
-            "fig.suptitle('Guo21 Fig. 11: Fraunhofer diffraction share (ice, lambda = 0.55 um)'); fig.tight_layout()\n"
-            "fig.savefig(png, dpi=110)\n",
-            png);
+        const auto csv_path = ex.csv("guo21_fig11_diffraction_share.csv", csv);
+        ex.plot("guo21_fig11_diffraction_share", csv_path, out / "guo21_fig11_diffraction_share.png");
         std::printf("Guo21 Fig. 11: share of energy carried by Fraunhofer diffraction (ice 1.31, 0.55 um)\n");
         std::printf("  %8s %28s %28s\n", "r [um]", "share > 50 % below [deg]", "total share of scattering");
-        gl_examples::Json j;
+        gl_examples::Json j = ex.summary();
         for (std::size_t k = 0; k < radii.size(); ++k) {
             std::printf("  %8.0f %28.4g %28.3f\n", radii[k], half_angle[k], total_share[k]);
             j.num("half_angle_deg_r" + std::to_string(int(radii[k])), half_angle[k])
@@ -101,7 +87,6 @@ int main(int argc, char** argv) {
         }
         std::printf("  paper: diffraction matters most for small particles; at 1000 um it is confined to a very\n"
                     "  narrow forward cone (the half-share angle scales like lambda / r).\n");
-        std::cout << j.str() << std::endl;
-        return 0;
+        return ex.finish(j);
     });
 }

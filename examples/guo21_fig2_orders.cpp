@@ -14,17 +14,16 @@
 #include <string>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
+#include "common/harness.hpp"
 #include "grainlight/optics/goa.hpp"
 
 int main(int argc, char** argv) {
-    return gl_examples::run_main("guo21_fig2_orders", [&]() -> int {
-        gl_examples::Cli cli(argc, argv, "guo21_fig2_orders", "Guo21 Fig. 2: GOA (|S1|+|S2|)/2 for p = 1, 2, 3, 100");
-        cli.common_options("out");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const auto out = cli.out_dir();
+    return gl_examples::run(argc, argv, "guo21_fig2_orders",
+                            "Guo21 Fig. 2: GOA (|S1|+|S2|)/2 for p = 1, 2, 3, 100",
+                            [&](gl_examples::Example& ex) -> int {
+        ex.ready();
+        const bool full = ex.full();
+        const auto& out = ex.out();
         const double pi = 3.14159265358979323846, lambda = 0.6;
         const std::complex<double> m(1.33, 0);
         const std::vector<double> radii = {2, 10, 100};
@@ -51,24 +50,11 @@ int main(int argc, char** argv) {
                 for (std::size_t j = 0; j < orders.size(); ++j) row.push_back(F[i][j][std::size_t(a)]);
             csv.row(row);
         }
-        const auto csv_path = out / "guo21_fig2_orders.csv";
-        csv.write(csv_path);
-        const auto png = out / "guo21_fig2_orders.png";
-        gl_examples::plot_with_matplotlib(
-            out / "guo21_fig2_orders.py",
-            "d = read_csv(r'''" + csv_path.string() + "''')\n"
-            "fig, ax = plt.subplots(1, 3, figsize=(15, 4))\n"
-            "for k, r in enumerate([2, 10, 100]):\n"
-            "    for p, st in zip([1, 2, 3, 100], [':', '-.', '-', '--']):\n"
-            "        ax[k].semilogy(d['theta_deg'], d['F_r%d_p%d' % (r, p)], st, lw=1, label='p <= %d' % p)\n"
-            "    ax[k].set_title('r = %d um' % r); ax[k].set_xlabel('scattering angle [deg]'); ax[k].legend()\n"
-            "ax[0].set_ylabel('(|S1|+|S2|)/2 (GOA)')\n"
-            "fig.suptitle('Guo21 Fig. 2: impact of p, eta = 1.33, lambda = 0.6 um'); fig.tight_layout()\n"
-            "fig.savefig(png, dpi=110)\n",
-            png);
+        const auto csv_path = ex.csv("guo21_fig2_orders.csv", csv);
+        ex.plot("guo21_fig2_orders", csv_path, out / "guo21_fig2_orders.png");
         std::printf("Guo21 Fig. 2: GOA (|S1|+|S2|)/2 for p <= 1, 2, 3 vs p <= 100 (eta 1.33, lambda 0.6 um)\n");
         std::printf("  %8s %4s %22s %24s\n", "r [um]", "p", "energy diff vs p=100", "max |F_p/F_100 - 1|");
-        gl_examples::Json j;
+        gl_examples::Json j = ex.summary();
         for (std::size_t i = 0; i < radii.size(); ++i)
             for (std::size_t jj = 0; jj + 1 < orders.size(); ++jj) {
                 double num = 0, den = 0, worst = 0;
@@ -84,7 +70,6 @@ int main(int argc, char** argv) {
                         .num("max_rel_diff_p3_vs_p100_r" + std::to_string(int(radii[i])), worst);
             }
         std::printf("  paper: p = 3 gives an almost identical curve to p = 100 at every size.\n");
-        std::cout << j.str() << std::endl;
-        return 0;
+        return ex.finish(j);
     });
 }

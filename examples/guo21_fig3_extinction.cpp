@@ -14,37 +14,46 @@
 #include <iostream>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
-#include "common/progress.hpp"
+#include "common/harness.hpp"
 #include "grainlight/optics/goa.hpp"
 #include "grainlight/optics/lorenz_mie.hpp"
 
 int main(int argc, char** argv) {
-    return gl_examples::run_main("guo21_fig3_extinction", [&]() -> int {
-        gl_examples::Cli cli(argc, argv, "guo21_fig3_extinction", "Guo21 Fig. 3: C_t(r) by Mie, GOA p = 3 and p = 1");
-        cli.common_options("out");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const auto out = cli.out_dir();
-        const int threads = cli.threads();
-        (void)threads;
+    return gl_examples::run(argc, argv, "guo21_fig3_extinction",
+                            "Guo21 Fig. 3: C_t(r) by Mie, GOA p = 3 and p = 1",
+                            [&](gl_examples::Example& ex) -> int {
+        ex.ready();
+        const bool full = ex.full();
+        const auto& out = ex.out();
         const double pi = 3.14159265358979323846, lambda = 0.6, eta = 1.33, k = 2 * pi / lambda;
         const int n = full ? 4000 : 800;
-        std::vector<double> r(n), mie(n), goa3(n), goa1(n), eq14(n);
-        gl_examples::ProgressBar bar("C_t(r)", std::uint64_t(n));
-#pragma omp parallel for schedule(dynamic, 8) num_threads(threads)
-        for (int i = 0; i < n; ++i) {
-            const double ri = 0.1 * std::pow(1000.0, double(i) / (n - 1));
-            r[std::size_t(i)] = ri;
-            const double geo = pi * ri * ri;
-            mie[std::size_t(i)] = grainlight::LorenzMie({eta, 0}, k * ri).efficiencies().qext * geo;
-            goa3[std::size_t(i)] = grainlight::Goa({eta, 0}, k * ri, 3).qext() * geo;
-            goa1[std::size_t(i)] = grainlight::Goa({eta, 0}, k * ri, 1).qext() * geo;
-            eq14[std::size_t(i)] = grainlight::goa_extinction_cross_section_eq14(ri, eta, k);
-            bar.advance();
-        }
-        bar.done();
+        // Radii in blocks of 8 on the example's threads; the blocks are appended in order.
+        struct Curves {
+            std::vector<double> r, mie, goa3, goa1, eq14;
+        };
+        const Curves c = ex.parallel<Curves>(
+            "C_t(r)", std::uint64_t(n), 8,
+            [&](std::uint64_t, std::uint64_t begin, std::uint64_t end) {
+                Curves part;
+                for (std::uint64_t i = begin; i < end; ++i) {
+                    const double ri = 0.1 * std::pow(1000.0, double(i) / (n - 1));
+                    const double geo = pi * ri * ri;
+                    part.r.push_back(ri);
+                    part.mie.push_back(grainlight::LorenzMie({eta, 0}, k * ri).efficiencies().qext * geo);
+                    part.goa3.push_back(grainlight::Goa({eta, 0}, k * ri, 3).qext() * geo);
+                    part.goa1.push_back(grainlight::Goa({eta, 0}, k * ri, 1).qext() * geo);
+                    part.eq14.push_back(grainlight::goa_extinction_cross_section_eq14(ri, eta, k));
+                }
+                return part;
+            },
+            [](Curves& acc, const Curves& part) {
+                acc.r.insert(acc.r.end(), part.r.begin(), part.r.end());
+                acc.mie.insert(acc.mie.end(), part.mie.begin(), part.mie.end());
+                acc.goa3.insert(acc.goa3.end(), part.goa3.begin(), part.goa3.end());
+                acc.goa1.insert(acc.goa1.end(), part.goa1.begin(), part.goa1.end());
+                acc.eq14.insert(acc.eq14.end(), part.eq14.begin(), part.eq14.end());
+            });
+        const std::vector<double>&r = c.r, &mie = c.mie, &goa3 = c.goa3, &goa1 = c.goa1, &eq14 = c.eq14;
         gl_examples::Csv csv({"r_um", "Ct_mie", "Ct_goa_p3", "Ct_goa_p1", "Ct_eq14", "Qext_mie", "Qext_goa_p3", "Qext_goa_p1"});
         double relmse = 0, relmse1 = 0, worst_eq = 0;
         int n1 = 0;
@@ -72,22 +81,8 @@ int main(int argc, char** argv) {
         }
         relmse /= n;
         relmse1 /= std::max(n1, 1);
-        const auto csv_path = out / "guo21_fig3_extinction.csv";
-        csv.write(csv_path);
-        const auto png = out / "guo21_fig3_extinction.png";
-        gl_examples::plot_with_matplotlib(
-            out / "guo21_fig3_extinction.py",
-            "d = read_csv(r'''" + csv_path.string() + "''')\n"
-            "fig, ax = plt.subplots(1, 2, figsize=(13, 4.2))\n"
-            "for a, lo, hi in [(ax[0], 0.1, 10), (ax[1], 0.1, 100)]:\n"
-            "    r = np.array(d['r_um']); s = (r >= lo) & (r <= hi)\n"
-            "    a.plot(r[s], np.array(d['Qext_mie'])[s], 'b-', lw=1, label='Lorenz-Mie')\n"
-            "    a.plot(r[s], np.array(d['Qext_goa_p3'])[s], 'r-', lw=1, label='GOA p = 3 (Eq. 12)')\n"
-            "    a.plot(r[s], np.array(d['Qext_goa_p1'])[s], 'g--', lw=1, label='GOA p = 1 (Eq. 14)')\n"
-            "    a.set_xscale('log'); a.set_xlabel('r [um]'); a.set_ylabel('C_t / (pi r^2)'); a.legend()\n"
-            "fig.suptitle('Guo21 Fig. 3: extinction, eta = 1.33, lambda = 0.6 um'); fig.tight_layout()\n"
-            "fig.savefig(png, dpi=110)\n",
-            png);
+        const auto csv_path = ex.csv("guo21_fig3_extinction.csv", csv);
+        ex.plot("guo21_fig3_extinction", csv_path, out / "guo21_fig3_extinction.png");
         std::printf("Guo21 Fig. 3: C_t(r), eta = 1.33, lambda = 0.6 um, %d radii in [0.1, 100] um\n", n);
         std::printf("  RelMSE (C_t^p3 - C_t^p1)^2 / (C_t^p3)^2, mean over r >= 1 um: %.3e   (paper: < 1e-5)\n", relmse1);
         std::printf("  same, mean over all r from 0.1 um: %.3e (below x ~ 5 Eq. 12's ripple term is as large as 2 pi r^2)\n",
@@ -98,13 +93,12 @@ int main(int argc, char** argv) {
         std::printf("  (GOA has no edge term: Q_ext -> 2 from below; Mie ~ 2 + c x^(-2/3). Ripple period in r:\n"
                     "   lambda / (2 |eta - 1|) = %.3f um, captured by both.)\n",
                     lambda / (2 * std::abs(eta - 1)));
-        gl_examples::Json j;
+        gl_examples::Json j = ex.summary();
         j.num("relmse_p3_vs_p1_r_ge_1", relmse1)
             .num("relmse_p3_vs_p1_all", relmse)
             .num("max_rel_eq12p1_vs_eq14", worst_eq)
             .num("goa_vs_mie_rel_dev_r2", c2 ? dev2 / c2 : 0.0)
             .num("goa_vs_mie_rel_dev_r100", c100 ? dev100 / c100 : 0.0);
-        std::cout << j.str() << std::endl;
-        return 0;
+        return ex.finish(j);
     });
 }

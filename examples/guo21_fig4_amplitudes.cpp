@@ -14,18 +14,17 @@
 #include <string>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
+#include "common/harness.hpp"
 #include "grainlight/optics/goa.hpp"
 #include "grainlight/optics/lorenz_mie.hpp"
 
 int main(int argc, char** argv) {
-    return gl_examples::run_main("guo21_fig4_amplitudes", [&]() -> int {
-        gl_examples::Cli cli(argc, argv, "guo21_fig4_amplitudes", "Guo21 Fig. 4: log|S1|, log|S2| by Mie and GOA");
-        cli.common_options("out");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const auto out = cli.out_dir();
+    return gl_examples::run(argc, argv, "guo21_fig4_amplitudes",
+                            "Guo21 Fig. 4: log|S1|, log|S2| by Mie and GOA",
+                            [&](gl_examples::Example& ex) -> int {
+        ex.ready();
+        const bool full = ex.full();
+        const auto& out = ex.out();
         const double pi = 3.14159265358979323846, lambda = 0.6;
         const std::complex<double> m(1.33, 0);
         const std::vector<double> radii = {0.1, 1, 2, 10, 100};
@@ -67,31 +66,16 @@ int main(int argc, char** argv) {
             for (auto& c : cols) row.push_back(c[std::size_t(a)]);
             csv.row(row);
         }
-        const auto csv_path = out / "guo21_fig4_amplitudes.csv";
-        csv.write(csv_path);
-        const auto png = out / "guo21_fig4_amplitudes.png";
-        gl_examples::plot_with_matplotlib(
-            out / "guo21_fig4_amplitudes.py",
-            "d = read_csv(r'''" + csv_path.string() + "''')\n"
-            "tags = ['0.1', '1', '2', '10', '100']\n"
-            "fig, ax = plt.subplots(2, 5, figsize=(20, 6.5))\n"
-            "for k, t in enumerate(tags):\n"
-            "    for row, j in [(0, 1), (1, 2)]:\n"
-            "        ax[row][k].plot(d['theta_deg'], d['logS%d_mie_r%s' % (j, t)], 'b-', lw=0.8, label='Lorenz-Mie')\n"
-            "        ax[row][k].plot(d['theta_deg'], d['logS%d_goa_r%s' % (j, t)], 'r-', lw=0.8, label='GOA')\n"
-            "        ax[row][k].set_title('log10 |S%d|, r = %s um' % (j, t)); ax[row][k].set_xlabel('theta [deg]')\n"
-            "        ax[row][k].legend(fontsize=7)\n"
-            "fig.suptitle('Guo21 Fig. 4: eta = 1.33, lambda = 0.6 um'); fig.tight_layout(); fig.savefig(png, dpi=100)\n",
-            png);
+        const auto csv_path = ex.csv("guo21_fig4_amplitudes.csv", csv);
+        ex.plot("guo21_fig4_amplitudes", csv_path, out / "guo21_fig4_amplitudes.png");
         std::printf("Guo21 Fig. 4: GOA vs Mie amplitudes, eta = 1.33, lambda = 0.6 um\n");
         std::printf("  %8s %26s %24s\n", "r [um]", "pooled |dS|^2, 5-175 deg", "energy err of F");
-        gl_examples::Json j;
+        gl_examples::Json j = ex.summary();
         for (std::size_t i = 0; i < radii.size(); ++i) {
             std::printf("  %8s %26.4f %24.4f\n", tags[i].c_str(), pooled[i], energy[i]);
             j.num("pooled_r" + tags[i], pooled[i]).num("energy_r" + tags[i], energy[i]);
         }
         std::printf("  paper: good agreement for r > 1 um (very good at 100 um), discrepancies at 1 um, large below.\n");
-        std::cout << j.str() << std::endl;
-        return 0;
+        return ex.finish(j);
     });
 }

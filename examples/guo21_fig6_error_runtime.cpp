@@ -24,9 +24,7 @@
 #include <string>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
-#include "common/progress.hpp"
+#include "common/harness.hpp"
 #include "grainlight/optics/goa.hpp"
 #include "grainlight/optics/lorenz_mie.hpp"
 
@@ -93,15 +91,12 @@ double min_time(Fn&& f, int reps) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    return gl_examples::run_main("guo21_fig6_error_runtime", [&]() -> int {
-        gl_examples::Cli cli(argc, argv, "guo21_fig6_error_runtime",
-                             "Guo21 Fig. 6: GOA vs Mie error of (|S1|+|S2|)/2 and runtime ratio vs r");
-        cli.common_options("out");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const auto out = cli.out_dir();
-        const int threads = cli.threads();
-        (void)threads;
+    return gl_examples::run(argc, argv, "guo21_fig6_error_runtime",
+                            "Guo21 Fig. 6: GOA vs Mie error of (|S1|+|S2|)/2 and runtime ratio vs r",
+                            [&](gl_examples::Example& ex) -> int {
+        ex.ready();
+        const bool full = ex.full();
+        const auto& out = ex.out();
 
         // ---- left: errors -------------------------------------------------------------------
         const std::vector<double> etas = {1.33, 1.5, 1.2, 0.75};
@@ -111,21 +106,20 @@ int main(int argc, char** argv) {
         } else {
             radii = {0.5, 1, 1.5, 2, 3, 5, 7, 10, 20, 50, 100};
         }
-        std::vector<Err> err(etas.size() * radii.size());
-        gl_examples::ProgressBar bar("errors", err.size());
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-        for (int k = 0; k < int(err.size()); ++k) {
-            err[std::size_t(k)] = errors(etas[std::size_t(k) / radii.size()], radii[std::size_t(k) % radii.size()]);
-            bar.advance();
-        }
-        bar.done();
+        // One (eta, r) pair per block on the example's threads, appended in order.
+        const std::vector<Err> err = ex.parallel<std::vector<Err>>(
+            "errors", etas.size() * radii.size(), 1,
+            [&](std::uint64_t k, std::uint64_t, std::uint64_t) {
+                return std::vector<Err>{errors(etas[std::size_t(k) / radii.size()], radii[std::size_t(k) % radii.size()])};
+            },
+            [](std::vector<Err>& acc, const std::vector<Err>& part) { acc.insert(acc.end(), part.begin(), part.end()); });
         gl_examples::Csv ecsv({"eta", "r_um", "relmse", "energy", "logerr"});
         for (std::size_t i = 0; i < etas.size(); ++i)
             for (std::size_t j = 0; j < radii.size(); ++j) {
                 const auto& e = err[i * radii.size() + j];
                 ecsv.row({etas[i], radii[j], e.relmse, e.energy, e.logerr});
             }
-        ecsv.write(out / "guo21_fig6_error.csv");
+        const auto error_csv = ex.csv("guo21_fig6_error.csv", ecsv);
 
         // ---- right: runtime ratio (serial, interleaved, minimum of repeats) -------------------
         const std::vector<double> rt = full ? std::vector<double>{1, 2, 5, 10, 20, 50, 100, 200, 500, 1000}
@@ -147,7 +141,7 @@ int main(int argc, char** argv) {
         };
         std::vector<grainlight::ScatteringAmplitudes> smie(mu.size());
         std::vector<Row> rows;
-        gl_examples::ProgressBar tbar("runtime", rt.size());
+        auto tbar = ex.progress("runtime", rt.size());
         for (double r : rt) {
             const double x = 2 * kPi * r / kLambda;
             const int reps = full ? 15 : (r >= 500 ? 3 : 7);
@@ -194,29 +188,8 @@ int main(int argc, char** argv) {
         }
         tbar.done();
         (void)sink;
-        tcsv.write(out / "guo21_fig6_runtime.csv");
-
-        const auto png = out / "guo21_fig6_error_runtime.png";
-        gl_examples::plot_with_matplotlib(
-            out / "guo21_fig6_error_runtime.py",
-            "e = read_csv(r'''" + (out / "guo21_fig6_error.csv").string() + "''')\n"
-            "t = read_csv(r'''" + (out / "guo21_fig6_runtime.csv").string() + "''')\n"
-            "fig, ax = plt.subplots(1, 3, figsize=(15, 4.2))\n"
-            "eta = np.array(e['eta']); r = np.array(e['r_um'])\n"
-            "for k, name in enumerate(['relmse', 'energy']):\n"
-            "    for v in sorted(set(eta)):\n"
-            "        s = eta == v\n"
-            "        ax[k].loglog(r[s], np.array(e[name])[s], 'o-', ms=3, label='eta = %g' % v)\n"
-            "    ax[k].axhline(0.01, color='k', lw=0.8, ls='--', label='0.01 (paper)')\n"
-            "    ax[k].axvline(2, color='gray', lw=0.8, ls=':')\n"
-            "    ax[k].set_xlabel('r [um]'); ax[k].legend(fontsize=8)\n"
-            "ax[0].set_title('per-angle RelMSE of (|S1|+|S2|)/2'); ax[1].set_title('energy-weighted error')\n"
-            "ax[2].loglog(t['r_um'], t['ratio'], 'o-', label='GOA solving rays per call')\n"
-            "ax[2].loglog(t['r_um'], t['ratio_cached'], 's-', label='GOA, rays cached per angle grid')\n"
-            "ax[2].set_xlabel('r [um]'); ax[2].set_ylabel('t_Mie / t_GOA'); ax[2].legend(fontsize=8)\n"
-            "ax[2].set_title('runtime ratio (181 angles)')\n"
-            "fig.suptitle('Guo21 Fig. 6, lambda = 0.6 um'); fig.tight_layout(); fig.savefig(png, dpi=110)\n",
-            png);
+        const auto runtime_csv = ex.csv("guo21_fig6_runtime.csv", tcsv);
+        ex.plot("guo21_fig6_error_runtime", error_csv, out / "guo21_fig6_error_runtime.png", {runtime_csv.string()});
 
         auto at = [&](double eta, double r) -> const Err& {
             std::size_t i = std::size_t(std::find(etas.begin(), etas.end(), eta) - etas.begin());
@@ -249,7 +222,7 @@ int main(int argc, char** argv) {
                 if (row.r == r) return row;
             return rows.back();
         };
-        gl_examples::Json j;
+        gl_examples::Json j = ex.summary();
         j.num("energy_err_eta133_r2", at(1.33, 2).energy)
             .num("energy_err_eta133_r5", at(1.33, 5).energy)
             .num("energy_err_eta133_r10", at(1.33, 10).energy)
@@ -264,7 +237,6 @@ int main(int argc, char** argv) {
             .num("t_mie_per_angle_r1000", row_at(1000).tp)
             .num("t_goa_r1", row_at(1).tg)
             .num("t_goa_r1000", row_at(1000).tg);
-        std::cout << j.str() << std::endl;
-        return 0;
+        return ex.finish(j);
     });
 }

@@ -16,17 +16,16 @@
 #include <string>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
+#include "common/harness.hpp"
 #include "grainlight/optics/bulk.hpp"
 
 int main(int argc, char** argv) {
-    return gl_examples::run_main("guo21_fig8_phase", [&]() -> int {
-        gl_examples::Cli cli(argc, argv, "guo21_fig8_phase", "Guo21 Fig. 8: ensemble phase functions of a few PSDs");
-        cli.common_options("out");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const auto out = cli.out_dir();
+    return gl_examples::run(argc, argv, "guo21_fig8_phase",
+                            "Guo21 Fig. 8: ensemble phase functions of a few PSDs",
+                            [&](gl_examples::Example& ex) -> int {
+        ex.ready();
+        const bool full = ex.full();
+        const auto& out = ex.out();
         grainlight::ParticleModel ice;
         ice.particle_index = {1.31, 0.0};
         const std::vector<double> wl = {0.45, 0.55, 0.65};
@@ -72,27 +71,13 @@ int main(int argc, char** argv) {
             for (const auto& c : cases) row.push_back(interp(c.bulk.theta, c.bulk.channels[1].phase, std::min(deg, 180.0) * pi / 180));
             csv.row(row);
         }
-        const auto csv_path = out / "guo21_fig8_phase.csv";
-        csv.write(csv_path);
-        const auto png = out / "guo21_fig8_phase.png";
-        gl_examples::plot_with_matplotlib(
-            out / "guo21_fig8_phase.py",
-            "d = read_csv(r'''" + csv_path.string() + "''')\n"
-            "fig, ax = plt.subplots(1, 2, figsize=(13, 4.5))\n"
-            "for k in d:\n"
-            "    if k == 'theta_deg': continue\n"
-            "    for a in ax: a.plot(d['theta_deg'], d[k], lw=1, label=k.replace('phase_', '').replace('_550nm', ''))\n"
-            "ax[0].set_yscale('log'); ax[0].set_xlim(0, 180); ax[0].set_xlabel('theta [deg]')\n"
-            "ax[1].set_xscale('log'); ax[1].set_yscale('log'); ax[1].set_xlabel('theta [deg] (log)')\n"
-            "for a in ax: a.set_ylabel('phase function [1/sr], 550 nm'); a.legend(fontsize=8)\n"
-            "fig.suptitle('Guo21 Fig. 8: ensemble phase functions (ice, eta = 1.31)'); fig.tight_layout()\n"
-            "fig.savefig(png, dpi=110)\n",
-            png);
+        const auto csv_path = ex.csv("guo21_fig8_phase.csv", csv);
+        ex.plot("guo21_fig8_phase", csv_path, out / "guo21_fig8_phase.png");
 
         std::printf("Guo21 Fig. 8: ensemble phase functions, ice eta = 1.31, wavelengths 450/550/650 nm\n");
         std::printf("  %-16s %6s %12s %8s %8s %12s %12s %12s %8s\n", "PSD", "lambda", "<C_t> um^2", "albedo", "g",
                     "p(0) [1/sr]", "p(90)", "p(180)", "time[s]");
-        gl_examples::Json j;
+        gl_examples::Json j = ex.summary();
         for (const auto& c : cases) {
             for (const auto& ch : c.bulk.channels) {
                 const double p90 = interp(c.bulk.theta, ch.phase, pi / 2);
@@ -103,7 +88,6 @@ int main(int argc, char** argv) {
             j.num("g_" + c.name + "_550nm", c.bulk.channels[1].g).num("seconds_" + c.name, c.seconds);
         }
         std::printf("  paper: phase functions become more forward-peaked as radii grow (Fig. 8 top); no numbers given.\n");
-        std::cout << j.str() << std::endl;
-        return 0;
+        return ex.finish(j);
     });
 }

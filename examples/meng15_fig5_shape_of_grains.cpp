@@ -19,9 +19,7 @@
 #include <type_traits>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
-#include "common/progress.hpp"
+#include "common/harness.hpp"
 #include "grainlight/integrators/ept.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/packing/md_packer.hpp"
@@ -34,27 +32,24 @@ namespace gl = grainlight;
 using namespace gl_examples;
 
 int main(int argc, char** argv) {
-    return run_main("meng15_fig5_shape_of_grains", [&] {
-        Cli cli(argc, argv, "meng15_fig5_shape_of_grains",
-                "Meng15 Fig. 5: a sphere and a box filled with millions of procedurally instanced grains (EPT)");
-        cli.common_options("out/meng15_fig5_shape_of_grains")
-            .option("grain", "cube | snow", "cube")
-            .option("shape", "sphere-box (a sphere and a box) | blob (a lumpy triangle-mesh blob)", "sphere-box")
-            .option("grain-radius", "bounding-sphere radius of the grains (scene units; the sphere has radius 0.5)", "0.004")
-            .option("spp", "samples per pixel (default: 8 quick, 64 full)")
-            .option("exposure", "PNG exposure in stops", "1");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const auto out = cli.out_dir("out/meng15_fig5_shape_of_grains");
-        const int threads = cli.threads();
-        const std::uint64_t seed = cli.seed();
-        const std::string grain = cli.str("grain", "cube");
+    return run(argc, argv, "meng15_fig5_shape_of_grains",
+               "Meng15 Fig. 5: a sphere and a box filled with millions of procedurally instanced grains (EPT)",
+               "out/meng15_fig5_shape_of_grains", [&](Example& app) -> int {
+        const std::string grain = app.opt<std::string>("grain", "cube", "cube | snow");
+        const std::string shape_name = app.opt<std::string>(
+            "shape", "sphere-box", "sphere-box (a sphere and a box) | blob (a lumpy triangle-mesh blob)");
+        const double r_grain = app.opt<double>(
+            "grain-radius", 0.004, "bounding-sphere radius of the grains (scene units; the sphere has radius 0.5)");
+        const std::uint64_t spp = app.opt<std::uint64_t>("spp", 8, 64, "samples per pixel");
+        const double exposure = app.opt<double>("exposure", 1.0, "PNG exposure in stops");
+        app.ready();
+        const bool full = app.full();
+        const auto& out = app.out();
+        const int threads = app.threads();
+        const std::uint64_t seed = app.seed();
         if (grain != "cube" && grain != "snow") throw cli_error("--grain = '" + grain + "' must be cube or snow");
-        const double r_grain = cli.num("grain-radius", 0.004);
         if (!(r_grain >= 2e-4 && r_grain <= 0.05)) throw cli_error("--grain-radius must be in [2e-4, 0.05]");
-        const std::uint64_t spp = cli.integer("spp", full ? 64 : 8);
         if (spp < 1 || spp > 65536) throw cli_error("--spp must be in [1, 65536]");
-        const double exposure = cli.num("exposure", 1.0);
         const int width = full ? 640 : 320, height = full ? 400 : 200;
 
         // Tile: MD packing at f = 0.6, scaled to the grain radius.
@@ -82,7 +77,6 @@ int main(int argc, char** argv) {
             }
             w = {1, 1, 1};
         }
-        const std::string shape_name = cli.str("shape", "sphere-box");
         if (shape_name != "sphere-box" && shape_name != "blob")
             throw cli_error("--shape = '" + shape_name + "' must be sphere-box or blob");
         auto render = [&](const auto& shape) {
@@ -108,7 +102,7 @@ int main(int argc, char** argv) {
                                                   32.0f, width, height);
             gl::EptOptions opt;
             opt.max_events = full ? 4096 : 512;
-            ProgressBar bar("fig5", std::uint64_t(height));
+            auto bar = app.progress("fig5", std::uint64_t(height));
             const auto t0 = std::chrono::steady_clock::now();
             const gl::EptImages img = gl::render_ept(scene, agg, camera, int(spp), seed, threads, opt,
                                                      [&](int n) { bar.advance(std::uint64_t(n)); });
@@ -135,14 +129,14 @@ int main(int argc, char** argv) {
             std::printf("  low-order (<= %d grain interactions) mean %.4f, high-order mean %.4f (green channel)\n",
                         opt.low_order_max, img.low.image().mean(1), img.high.image().mean(1));
             std::printf("wrote %s/meng15_fig5_{shape_of_grains,low_order,high_order}.{exr,png}\n", out.c_str());
-            Json j;
+            Json j = app.summary();
             j.integer("grains", (long long)n_grains)
                 .num("memory_mb", mem_mb)
                 .num("explicit_memory_mb", explicit_mb)
                 .num("rays_per_second", rays_per_s)
                 .num("seconds", seconds)
                 .integer("spp", (long long)spp);
-            std::cout << j.str() << std::endl;
+            app.finish(j);
         };
         if (shape_name == "blob") {
             // A lumpy, bunny-sized blob: the procedural snow shape scaled to radius 0.6, as a

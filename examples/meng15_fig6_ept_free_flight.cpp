@@ -18,9 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
-#include "common/progress.hpp"
+#include "common/harness.hpp"
 #include "grainlight/integrators/ept.hpp"
 #include "grainlight/media/teleportation.hpp"
 #include "grainlight/packing/md_packer.hpp"
@@ -30,15 +28,14 @@ namespace gl = grainlight;
 using namespace gl_examples;
 
 int main(int argc, char** argv) {
-    return run_main("meng15_fig6_ept_free_flight", [&] {
-        Cli cli(argc, argv, "meng15_fig6_ept_free_flight",
-                "Meng15 Fig. 6 bottom: EPT free flights in an infinite aggregate vs Eq. 4 (f = 0.63)");
-        cli.common_options("out/meng15_fig6_ept_free_flight");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const auto out = cli.out_dir("out/meng15_fig6_ept_free_flight");
-        const int threads = cli.threads();
-        const std::uint64_t seed = cli.seed();
+    return run(argc, argv, "meng15_fig6_ept_free_flight",
+               "Meng15 Fig. 6 bottom: EPT free flights in an infinite aggregate vs Eq. 4 (f = 0.63)",
+               "out/meng15_fig6_ept_free_flight", [&](Example& ex) -> int {
+        ex.ready();
+        const bool full = ex.full();
+        const auto& out = ex.out();
+        const int threads = ex.threads();
+        const std::uint64_t seed = ex.seed();
         const double f = 0.63;  // Meng15 Fig. 6 caption
 
         // Tile of unit bounding spheres.
@@ -60,15 +57,14 @@ int main(int argc, char** argv) {
         const std::uint64_t paths = full ? 40000 : 3000;
         const int per_path = 20, skip = 5, bins = 60;
         const double z_max = 8.0;
-        ProgressBar bar("fig6-ept", 3);
         std::printf("Meng15 Fig. 6 bottom (EPT), f = %.4f, %zu spheres per tile, %llu photon paths x %d interactions per grain\n",
                     f_real, tile.size(), (unsigned long long)paths, per_path);
-        Json j;
+        Json j = ex.summary();
         j.num("packing_rate", f_real);
         std::vector<std::string> header{"z"};
         std::vector<std::vector<double>> cols;
         double worst = 0;
-        std::string means_py = "means = {";
+        std::vector<std::string> means;  // preset:EPT mean:Eq. 4 mean, for the plot
         for (const auto& g : grains) {
             const gl::GrainPreset p = gl::grain_preset(g.preset);
             gl::ScatterometerConfig cfg;
@@ -83,21 +79,33 @@ int main(int argc, char** argv) {
                                                {gl::GrainExemplar::from_preset(p, level)}, {1.0}, seed);
             // Paths in blocks over threads; blocks reduced in order (thread-count independent).
             const std::uint64_t block = 250;
-            const std::uint64_t nb = (paths + block - 1) / block;
-            std::vector<gl::FreeFlightStats> parts(nb);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-            for (long long b = 0; b < (long long)nb; ++b)
-                parts[std::size_t(b)] = gl::ept_free_flights(agg, std::min(block, paths - std::uint64_t(b) * block), skip,
-                                                             per_path, gl::hash_words(seed, std::uint64_t(b)), bins, z_max);
-            double n = 0, s = 0, s2 = 0;
-            std::vector<double> hist(bins, 0.0);
-            for (const auto& pt : parts) {
-                const double m = double(pt.samples);
-                n += m;
-                s += pt.mean * m;
-                s2 += (pt.stderr_mean * pt.stderr_mean * m + pt.mean * pt.mean) * m;
-                for (int i = 0; i < bins; ++i) hist[std::size_t(i)] += pt.hist[std::size_t(i)] * m;
-            }
+            struct Sums {
+                double n = 0, s = 0, s2 = 0;
+                std::vector<double> hist;
+            };
+            const Sums sums = ex.parallel<Sums>(
+                std::string("fig6-ept ") + g.preset, paths, block,
+                [&](std::uint64_t b, std::uint64_t begin, std::uint64_t end) {
+                    Sums part;
+                    const gl::FreeFlightStats pt = gl::ept_free_flights(agg, end - begin, skip, per_path,
+                                                                        gl::hash_words(seed, b), bins, z_max);
+                    const double m = double(pt.samples);
+                    part.n = m;
+                    part.s = pt.mean * m;
+                    part.s2 = (pt.stderr_mean * pt.stderr_mean * m + pt.mean * pt.mean) * m;
+                    part.hist.resize(std::size_t(bins));
+                    for (int i = 0; i < bins; ++i) part.hist[std::size_t(i)] = pt.hist[std::size_t(i)] * m;
+                    return part;
+                },
+                [&](Sums& acc, const Sums& part) {
+                    acc.n += part.n;
+                    acc.s += part.s;
+                    acc.s2 += part.s2;
+                    for (int i = 0; i < bins; ++i) acc.hist[std::size_t(i)] += part.hist[std::size_t(i)];
+                },
+                Sums{0, 0, 0, std::vector<double>(std::size_t(bins), 0.0)});
+            const double n = sums.n, s = sums.s, s2 = sums.s2;
+            std::vector<double> hist = sums.hist;
             const double mean = s / n, se = std::sqrt(std::max(0.0, s2 / n - mean * mean) / n);
             for (auto& h : hist) h /= n;
             const double rel = mean / lambda_t - 1.0;
@@ -111,7 +119,7 @@ int main(int argc, char** argv) {
                 ce[std::size_t(i)] = hist[std::size_t(i)];
                 ca[std::size_t(i)] = std::exp(-z / lambda_t) / lambda_t;
             }
-            means_py += std::string("'") + g.preset + "': (" + std::to_string(mean) + ", " + std::to_string(lambda_t) + "), ";
+            means.push_back(std::string(g.preset) + ":" + std::to_string(mean) + ":" + std::to_string(lambda_t));
             header.push_back(std::string(g.preset) + "_ept");
             header.push_back(std::string(g.preset) + "_eq4");
             cols.push_back(ce);
@@ -120,34 +128,17 @@ int main(int argc, char** argv) {
                 .num(std::string(g.preset) + "_ept_stderr", se)
                 .num(std::string(g.preset) + "_eq4_mean", lambda_t)
                 .num(std::string(g.preset) + "_beta", stats.beta());
-            bar.advance();
         }
-        bar.done();
         Csv csv(header);
         for (int i = 0; i < bins; ++i) {
             std::vector<double> row{(i + 0.5) * z_max / bins};
             for (const auto& c : cols) row.push_back(c[std::size_t(i)]);
             csv.row(row);
         }
-        const auto csv_path = out / "meng15_fig6_ept_free_flight.csv";
-        csv.write(csv_path);
-        plot_with_matplotlib(out / "meng15_fig6_ept_free_flight.py",
-                             means_py + "}\n"
-                             "b = read_csv(r'''" + csv_path.string() + "''')\n"
-                             "fig, ax = plt.subplots(figsize=(6.5, 4))\n"
-                             "z = np.array(b['z'])\n"
-                             "for g, c in (('salt','C3'),('flour','C0'),('sand','C1')):\n"
-                             "    pe = np.array(b[g+'_ept']); pa = np.array(b[g+'_eq4'])\n"
-                             "    ax.plot(z, pe, '.', color=c, label=g+' EPT')\n"
-                             "    ax.plot(z, pa, '-', color=c, label=g+' Eq. 4')\n"
-                             "    me, ma = means[g]\n"
-                             "    ax.axvline(me, color=c, ls=':'); ax.axvline(ma, color=c, ls='--')\n"
-                             "ax.set_xlabel('z / R'); ax.set_ylabel('$p_t(z)$'); ax.set_title('f = 0.63, EPT vs Eq. 4 (means: dotted EPT, dashed Eq. 4)')\n"
-                             "ax.legend(fontsize=8); fig.tight_layout(); fig.savefig(png, dpi=110)\n",
-                             out / "meng15_fig6_ept_free_flight.png");
+        const auto csv_path = ex.csv("meng15_fig6_ept_free_flight.csv", csv);
+        ex.plot("meng15_fig6_ept_free_flight", csv_path, out / "meng15_fig6_ept_free_flight.png", means);
         j.num("max_rel_mean_error", worst);
         std::printf("wrote %s and meng15_fig6_ept_free_flight.png (%d threads)\n", csv_path.c_str(), threads);
-        std::cout << j.str() << std::endl;
-        return 0;
+        return ex.finish(j);
     });
 }

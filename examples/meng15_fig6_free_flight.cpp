@@ -19,9 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
-#include "common/progress.hpp"
+#include "common/harness.hpp"
 #include "grainlight/core/statistics.hpp"
 #include "grainlight/media/teleportation.hpp"
 #include "grainlight/precompute/scatterometer.hpp"
@@ -32,19 +30,19 @@ namespace gl = grainlight;
 using namespace gl_examples;
 
 int main(int argc, char** argv) {
-    return run_main("meng15_fig6_free_flight", [&] {
-        Cli cli(argc, argv, "meng15_fig6_free_flight", "Meng15 Fig. 6: p_b(z) of the packing and p_t(z) of the TT medium at f = 0.63");
-        cli.common_options("out/meng15_fig6_free_flight");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const auto out = cli.out_dir("out/meng15_fig6_free_flight");
-        const int threads = cli.threads();
-        const std::uint64_t seed = cli.seed();
+    return run(argc, argv, "meng15_fig6_free_flight",
+               "Meng15 Fig. 6: p_b(z) of the packing and p_t(z) of the TT medium at f = 0.63",
+               "out/meng15_fig6_free_flight", [&](Example& ex) -> int {
+        ex.ready();
+        const bool full = ex.full();
+        const auto& out = ex.out();
+        const int threads = ex.threads();
+        const std::uint64_t seed = ex.seed();
         const double f = 0.63;  // Meng15 Fig. 6: "The packing rate is f = 0.63 for all grain types."
 
         // ---- top: chords of a packing of unit spheres ------------------------------------------
         const std::size_t n_spheres = full ? 4000 : 500;
-        ProgressBar bar("fig6", 4);
+        auto bar = ex.progress("fig6", 4);
         const auto packed = gl::md_pack(n_spheres, f, seed);
         const double scale = 1.0 / packed.tile.radius();
         std::vector<gl::Vec3d> centers = packed.tile.centers();
@@ -63,7 +61,7 @@ int main(int argc, char** argv) {
             const double z = (double(i) + 0.5) * zmax_b / double(bins_b);
             top.row({z, hb.density(i), std::exp(-z / lambda_b) / lambda_b});
         }
-        top.write(out / "meng15_fig6_top_chords.csv");
+        const auto top_csv = ex.csv("meng15_fig6_top_chords.csv", top);
 
         // ---- bottom: TT medium free flights for three grains ----------------------------------
         struct G {
@@ -83,7 +81,7 @@ int main(int argc, char** argv) {
         std::printf("Meng15 Fig. 6, f = %.2f (packing reached %.4f with %zu spheres)\n", f, f_real, n_spheres);
         std::printf("top: mean outer chord measured %.4f vs Dixmier/Eq. 1 lambda_b = 4R(1-f)/(3f) = %.4f (%llu chords)\n",
                     meas.mean(), lambda_b, (unsigned long long)meas.complete_chords);
-        Json j;
+        Json j = ex.summary();
         j.num("packing_rate", f_real).num("chord_mean", meas.mean()).num("lambda_b", lambda_b);
         const std::uint64_t rays = full ? 1000000 : 100000;
         const int flights = full ? 2000000 : 400000;
@@ -129,23 +127,9 @@ int main(int argc, char** argv) {
             for (const auto& c : cols) row.push_back(c[i]);
             bottom.row(row);
         }
-        const auto bottom_csv = out / "meng15_fig6_bottom_free_flight.csv";
-        bottom.write(bottom_csv);
-        plot_with_matplotlib(out / "meng15_fig6_free_flight.py",
-                             "t = read_csv(r'''" + (out / "meng15_fig6_top_chords.csv").string() + "''')\n"
-                             "b = read_csv(r'''" + bottom_csv.string() + "''')\n"
-                             "fig, (a1, a2) = plt.subplots(2, 1, figsize=(6.5, 7))\n"
-                             "a1.plot(t['z'], t['p_b_measured'], 'k.', label='measured (MD packing)')\n"
-                             "a1.plot(t['z'], t['p_b_dixmier'], 'r-', label='Dixmier, Eq. 1')\n"
-                             "a1.set_xlabel('z / R'); a1.set_ylabel('$p_b(z)$'); a1.legend(); a1.set_title('f = 0.63')\n"
-                             "for g, c in (('salt','C3'),('flour','C0'),('sand','C1')):\n"
-                             "    a2.plot(b['z'], b[g+'_tt'], '.', color=c, label=g+' TT medium')\n"
-                             "    a2.plot(b['z'], b[g+'_eq4'], '-', color=c, label=g+' Eq. 4')\n"
-                             "a2.set_xlabel('z / R'); a2.set_ylabel('$p_t(z)$'); a2.legend(fontsize=8)\n"
-                             "fig.tight_layout(); fig.savefig(png, dpi=110)\n",
-                             out / "meng15_fig6_free_flight.png");
+        const auto bottom_csv = ex.csv("meng15_fig6_bottom_free_flight.csv", bottom);
+        ex.plot("meng15_fig6_free_flight", top_csv, out / "meng15_fig6_free_flight.png", {bottom_csv.string()});
         std::printf("wrote %s, meng15_fig6_top_chords.csv, meng15_fig6_free_flight.png (%d threads)\n", bottom_csv.c_str(), threads);
-        std::cout << j.str() << std::endl;
-        return 0;
+        return ex.finish(j);
     });
 }

@@ -29,9 +29,7 @@
 #include <string>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
-#include "common/progress.hpp"
+#include "common/harness.hpp"
 #include "grainlight/integrators/ept.hpp"
 #include "grainlight/media/teleportation.hpp"
 #include "grainlight/packing/md_packer.hpp"
@@ -182,17 +180,16 @@ void vpt_block(const Medium& m, std::uint64_t first, std::uint64_t count, std::u
 }  // namespace
 
 int main(int argc, char** argv) {
-    return run_main("meng15_fig9_fluence", [&] {
-        Cli cli(argc, argv, "meng15_fig9_fluence",
-                "Meng15 Fig. 9: detector-sphere fluence and exit radiance, EPT vs VPT with derived parameters");
-        cli.option("photons", "photons per grain and method (default: quick 16000, full 400000)", "");
-        cli.common_options("out/meng15_fig9_fluence");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const auto out = cli.out_dir("out/meng15_fig9_fluence");
-        const int threads = cli.threads();
-        const std::uint64_t seed = cli.seed();
-        const std::uint64_t photons = cli.integer("photons", full ? 400000 : 16000);
+    return run(argc, argv, "meng15_fig9_fluence",
+               "Meng15 Fig. 9: detector-sphere fluence and exit radiance, EPT vs VPT with derived parameters",
+               "out/meng15_fig9_fluence", [&](Example& ex) -> int {
+        const std::uint64_t photons =
+            ex.opt<std::uint64_t>("photons", 16000, 400000, "photons per grain and method");
+        ex.ready();
+        const bool full = ex.full();
+        const auto& out = ex.out();
+        const int threads = ex.threads();
+        const std::uint64_t seed = ex.seed();
         if (photons < 100) throw cli_error("--photons must be >= 100");
         const double f = 0.63;
 
@@ -209,10 +206,9 @@ int main(int argc, char** argv) {
         };
         const G grains[] = {{"glass-bead", "dielectric spheres"}, {"snow", "snow"}};
         const int level = 4;
-        ProgressBar bar("fig9", 4);
         Csv fcsv({"grain", "radius_mfp", "theta_deg", "fluence_ept", "fluence_vpt", "rel_diff", "frac_ept", "frac_vpt"});
         Csv rcsv({"grain", "radius_mfp", "band", "method", "ix", "iy", "value"});
-        Json j;
+        Json j = ex.summary();
         j.num("packing_rate", f_real).integer("photons", (long long)photons);
         std::printf("Meng15 Fig. 9 detector sphere, f = %.4f, unit grains, %llu photons per grain and method\n", f_real,
                     (unsigned long long)photons);
@@ -231,23 +227,24 @@ int main(int argc, char** argv) {
             const gl::GranularAggregate<B> agg(tile, gl::VoxelizedBoundary<B>({}, tile.side()),
                                                {gl::GrainExemplar::from_preset(p, level)}, {1.0}, seed);
             const std::uint64_t block = 100;
-            const std::uint64_t nb = (photons + block - 1) / block;
-            std::vector<Tally> te(nb), tv(nb);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-            for (long long b = 0; b < (long long)nb; ++b) {
-                const std::uint64_t first = std::uint64_t(b) * block, cnt = std::min(block, photons - first);
-                ept_block(agg, first, cnt, seed, radius, te[std::size_t(b)]);
-            }
-            bar.advance();
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-            for (long long b = 0; b < (long long)nb; ++b) {
-                const std::uint64_t first = std::uint64_t(b) * block, cnt = std::min(block, photons - first);
-                vpt_block(medium, first, cnt, seed, radius, tv[std::size_t(b)]);
-            }
-            bar.advance();
-            Tally E, V;
-            for (const auto& t : te) E.add(t);
-            for (const auto& t : tv) V.add(t);
+            // Blocks of photons on the example's threads, merged in block order (thread-count independent).
+            const auto merge = [](Tally& acc, const Tally& t) { acc.add(t); };
+            const Tally E = ex.parallel<Tally>(
+                std::string("fig9 ") + g.preset + " EPT", photons, block,
+                [&](std::uint64_t, std::uint64_t first, std::uint64_t end) {
+                    Tally t;
+                    ept_block(agg, first, end - first, seed, radius, t);
+                    return t;
+                },
+                merge);
+            const Tally V = ex.parallel<Tally>(
+                std::string("fig9 ") + g.preset + " VPT", photons, block,
+                [&](std::uint64_t, std::uint64_t first, std::uint64_t end) {
+                    Tally t;
+                    vpt_block(medium, first, end - first, seed, radius, t);
+                    return t;
+                },
+                merge);
             std::printf("\n%s: sigma_t = %.4f / R (mfp %.3f R), alpha_s = %.3f, g = %.3f; detectors at %.2f R and %.2f R; "
                         "EPT %.1f interactions/photon, VPT %.1f events/photon\n",
                         g.label, 1.0 / mfp, mfp, stats.alpha_s_avg(), stats.g_avg(), radius[0], radius[1],
@@ -294,40 +291,12 @@ int main(int argc, char** argv) {
                         better ? "<" : ">=");
             j.num(std::string(g.preset) + "_L1_7_5", l1[0]).num(std::string(g.preset) + "_L1_15", l1[1]);
         }
-        bar.done();
-        const auto fpath = out / "meng15_fig9_fluence.csv", rpath = out / "meng15_fig9_radiance_field.csv";
-        fcsv.write(fpath);
-        rcsv.write(rpath);
-        plot_with_matplotlib(
-            out / "meng15_fig9_fluence.py",
-            "d = read_csv(r'''" + fpath.string() + "''')\n"
-            "fig, axs = plt.subplots(1, 2, figsize=(10, 4))\n"
-            "for ax, g, lab in ((axs[0], 'glass-bead', 'dielectric spheres'), (axs[1], 'snow', 'snow')):\n"
-            "    for r, c in (('7.5', 'C0'), ('15', 'C3')):\n"
-            "        sel = [i for i in range(len(d['grain'])) if d['grain'][i] == g and str(d['radius_mfp'][i]).rstrip('0').rstrip('.') == r.rstrip('0').rstrip('.')]\n"
-            "        th = [d['theta_deg'][i] for i in sel]\n"
-            "        ax.semilogy(th, [d['fluence_ept'][i] for i in sel], 'o', color=c, label='EPT %s mfp' % r)\n"
-            "        ax.semilogy(th, [d['fluence_vpt'][i] for i in sel], '-', color=c, label='VPT %s mfp' % r)\n"
-            "    ax.set_xlabel('inclination theta [deg]'); ax.set_ylabel('exit density per source photon [1/R^2]')\n"
-            "    ax.set_title(lab); ax.legend(fontsize=8)\n"
-            "fig.tight_layout(); fig.savefig(png, dpi=110)\n"
-            "r = read_csv(r'''" + rpath.string() + "''')\n"
-            "n = " + std::to_string(n_field) + "\n"
-            "fig, axs = plt.subplots(2, 4, figsize=(12, 6))\n"
-            "for row, g in enumerate(('glass-bead', 'snow')):\n"
-            "    for col, (rad, m) in enumerate((('7.5','ept'),('7.5','vpt'),('15','ept'),('15','vpt'))):\n"
-            "        img = np.zeros((n, n))\n"
-            "        for i in range(len(r['grain'])):\n"
-            "            if r['grain'][i] == g and str(r['radius_mfp'][i]).rstrip('0').rstrip('.') == rad.rstrip('0').rstrip('.') and r['method'][i] == m and int(r['band'][i]) == 0:\n"
-            "                img[int(r['iy'][i]), int(r['ix'][i])] = r['value'][i]\n"
-            "        axs[row][col].imshow(img, origin='lower', extent=(-1, 1, -1, 1), cmap='inferno')\n"
-            "        axs[row][col].set_title('%s %s mfp %s (theta<45)' % (g, rad, m.upper()), fontsize=9)\n"
-            "fig.tight_layout(); fig.savefig(png.replace('.png', '_radiance.png'), dpi=100)\n",
-            out / "meng15_fig9_fluence.png");
+        const auto fpath = ex.csv("meng15_fig9_fluence.csv", fcsv);
+        const auto rpath = ex.csv("meng15_fig9_radiance_field.csv", rcsv);
+        ex.plot("meng15_fig9_fluence", fpath, out / "meng15_fig9_fluence.png", {rpath.string(), std::to_string(n_field)});
         j.boolean("agreement_better_at_15_mfp", order_ok);
         std::printf("\nwrote %s, %s, meng15_fig9_fluence.png, meng15_fig9_fluence_radiance.png (%d threads)\n", fpath.c_str(),
                     rpath.c_str(), threads);
-        std::cout << j.str() << std::endl;
-        return 0;
+        return ex.finish(j);
     });
 }

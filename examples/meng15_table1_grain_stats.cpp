@@ -13,9 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
-#include "common/progress.hpp"
+#include "common/harness.hpp"
 #include "grainlight/precompute/scatterometer.hpp"
 
 namespace gl = grainlight;
@@ -27,16 +25,13 @@ constexpr const char* presets[] = {"glass-bead", "flour", "salt", "sand", "snow"
 }  // namespace
 
 int main(int argc, char** argv) {
-    return run_main("meng15_table1_grain_stats", [&] {
-        Cli cli(argc, argv, "meng15_table1_grain_stats", "Meng15 Table 1: grain statistics of our grain set vs the paper");
-        cli.common_options("out/meng15_table1_grain_stats");
-        cli.option("rays", "incident rays per grain", "100000 (quick) / 2000000 (full)");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const auto out = cli.out_dir("out/meng15_table1_grain_stats");
-        const int threads = cli.threads();
-        const std::uint64_t rays = cli.integer("rays", full ? 2000000 : 100000);
-        const std::uint64_t seed = cli.seed();
+    return run(argc, argv, "meng15_table1_grain_stats", "Meng15 Table 1: grain statistics of our grain set vs the paper",
+               "out/meng15_table1_grain_stats", [&](Example& ex) -> int {
+        const std::uint64_t rays = ex.opt<std::uint64_t>("rays", 100000, 2000000, "incident rays per grain");
+        ex.ready();
+        const auto& out = ex.out();
+        const int threads = ex.threads();
+        const std::uint64_t seed = ex.seed();
 
         Csv csv({"grain", "paper_grain", "shape", "material", "radius", "beta", "beta_paper", "lambda_delta",
                  "lambda_delta_paper", "lambda_s", "lambda_s_paper", "alpha_s", "alpha_s_paper", "g", "beta_stderr",
@@ -46,7 +41,7 @@ int main(int argc, char** argv) {
                     (unsigned long long)rays, (unsigned long long)seed, threads);
         std::printf("%-12s %-12s | %6s %6s | %6s %6s | %6s %6s | %6s %6s | %6s\n", "grain", "paper", "l_dlt", "paper",
                     "l_s", "paper", "a_s", "paper", "beta", "paper", "g");
-        ProgressBar bar("Table 1 grains", std::size(presets) * rays);
+        auto bar = ex.progress("Table 1 grains", std::size(presets) * rays);
         for (const char* preset : presets) {
             const gl::GrainPreset p = gl::grain_preset(preset);
             const gl::Meng15Table1Column& col = *gl::find_meng15_table1(p.paper_column);
@@ -87,25 +82,12 @@ int main(int argc, char** argv) {
             json_rows += (json_rows.empty() ? "" : ",") + j.str();
         }
         bar.done();
-        const auto csv_path = out / "meng15_table1_grain_stats.csv";
-        csv.write(csv_path);
-        plot_with_matplotlib(out / "meng15_table1_grain_stats.py",
-                             "d = read_csv(r'''" + csv_path.string() + "''')\n"
-                             "keys = [('lambda_delta','$\\\\lambda_\\\\delta$'),('lambda_s','$\\\\lambda_s$'),('alpha_s','$\\\\alpha_s$'),('beta','$\\\\beta$')]\n"
-                             "fig, axs = plt.subplots(1, 4, figsize=(15,3.8))\n"
-                             "x = np.arange(len(d['grain']))\n"
-                             "for ax, (k, lab) in zip(axs, keys):\n"
-                             "    ax.bar(x-0.2, d[k+'_paper'], 0.4, label='Meng15 Table 1', color='0.6')\n"
-                             "    ax.bar(x+0.2, d[k], 0.4, label='ours (procedural grains)', color='C0')\n"
-                             "    ax.set_xticks(x); ax.set_xticklabels(d['paper_grain'], rotation=45, ha='right', fontsize=8)\n"
-                             "    ax.set_title(lab)\n"
-                             "axs[0].legend(fontsize=7)\n"
-                             "fig.suptitle('Meng15 Table 1: scatterometer statistics, paper vs ours')\n"
-                             "fig.tight_layout(); fig.savefig(png, dpi=110)\n",
-                             out / "meng15_table1_grain_stats.png");
+        const auto csv_path = ex.csv("meng15_table1_grain_stats.csv", csv);
+        ex.plot("meng15_table1_grain_stats", csv_path, out / "meng15_table1_grain_stats.png");
         std::printf("wrote %s and meng15_table1_grain_stats.png; why procedural grains differ: docs/meng15.md\n",
                     csv_path.c_str());
-        std::cout << "{\"rays\":" << rays << ",\"grains\":[" << json_rows << "]}" << std::endl;
-        return 0;
+        Json j = ex.summary();
+        j.integer("rays", (long long)rays).raw("grains", "[" + json_rows + "]");
+        return ex.finish(j);
     });
 }

@@ -22,8 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
+#include "common/harness.hpp"
 #include "grainlight/optics/goa.hpp"
 #include "grainlight/optics/lorenz_mie.hpp"
 #include "grainlight/optics/particle.hpp"
@@ -42,45 +41,44 @@ std::string complex_list(const std::vector<std::complex<double>>& v) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    return gl_examples::run_main("mie", [&] {
+    const gl_examples::OutOption out_option{
+        "", "if given: also write DIR/mie.csv (S1, S2 at 0..180 deg, 0.5-deg steps) and DIR/mie.png"};
+    return gl_examples::run(argc, argv, "mie", "Lorenz-Mie / GOA scattering by one sphere (Guo21 Sec. 3)", out_option,
+                            [&](gl_examples::Example& ex) -> int {
         using gl_examples::cli_error;
-        gl_examples::Cli cli(argc, argv, "mie", "Lorenz-Mie / GOA scattering by one sphere (Guo21 Sec. 3)");
-        cli.option("n", "real part of the particle index relative to the host (> 0)", "1.5")
-            .option("k", "absorption index (imaginary part, >= 0)", "0")
-            .option("x", "size parameter 2 pi N R / L (> 0); or give --radius-um")
-            .option("radius-um", "particle radius R [um] (> 0)")
-            .option("wavelength-um", "vacuum wavelength L [um] (> 0)", "0.6")
-            .option("host-index", "host refractive index N (> 0)", "1")
-            .option("angles", "scattering angles in degrees, comma-separated, each in [0, 180]",
-                    "0,30,60,90,120,150,180")
-            .option("method", "mie | goa | auto (auto: GOA from r = 2 um on where GOA is valid, Mie elsewhere; needs --radius-um)", "mie")
-            .option("p-max", "highest GOA order p", "3")
-            .option("out", "if given: also write DIR/mie.csv (S1, S2 at 0..180 deg, 0.5-deg steps) and DIR/mie.png");
-        cli.finish();
+        const double n = ex.opt<double>("n", 1.5, "real part of the particle index relative to the host (> 0)");
+        const double k = ex.opt<double>("k", 0.0, "absorption index (imaginary part, >= 0)");
+        const auto x_arg = ex.opt_optional<double>("x", "size parameter 2 pi N R / L (> 0); or give --radius-um");
+        const auto radius_arg = ex.opt_optional<double>("radius-um", "particle radius R [um] (> 0)");
+        const double lambda = ex.opt<double>("wavelength-um", 0.6, "vacuum wavelength L [um] (> 0)");
+        const double host = ex.opt<double>("host-index", 1.0, "host refractive index N (> 0)");
+        const auto angles = ex.opt<std::vector<double>>(
+            "angles", {0, 30, 60, 90, 120, 150, 180}, "scattering angles in degrees, comma-separated, each in [0, 180]");
+        const std::string method = ex.opt<std::string>(
+            "method", "mie",
+            "mie | goa | auto (auto: GOA from r = 2 um on where GOA is valid, Mie elsewhere; needs --radius-um)");
+        const auto p_max = ex.opt<std::uint64_t>("p-max", 3, "highest GOA order p");
+        ex.ready(gl_examples::Example::OutKind::optional_directory);
 
-        const double n = cli.num("n", 1.5), k = cli.num("k", 0.0);
-        if (!(std::isfinite(n) && n > 0)) throw cli_error("--n = " + cli.str("n") + " must be a finite number > 0");
-        if (!(std::isfinite(k) && k >= 0)) throw cli_error("--k = " + cli.str("k") + " must be a finite number >= 0");
-        const std::string method = cli.str("method", "mie");
+        if (!(std::isfinite(n) && n > 0)) throw cli_error("--n = " + ex.given_text("n") + " must be a finite number > 0");
+        if (!(std::isfinite(k) && k >= 0)) throw cli_error("--k = " + ex.given_text("k") + " must be a finite number >= 0");
         if (method != "mie" && method != "goa" && method != "auto")
             throw cli_error("--method = '" + method + "' is unknown; use mie, goa or auto");
-        const auto p_max = cli.integer("p-max", 3);
-        if (p_max > 1000) throw cli_error("--p-max = " + cli.str("p-max") + " must be <= 1000");
+        if (p_max > 1000) throw cli_error("--p-max = " + ex.given_text("p-max") + " must be <= 1000");
 
         double x = 0, radius = -1;
-        if (cli.has("x") && cli.has("radius-um")) throw cli_error("give either --x or --radius-um, not both");
-        if (cli.has("x")) {
-            x = cli.num("x");
-            if (!(std::isfinite(x) && x > 0)) throw cli_error("--x = " + cli.str("x") + " must be a finite number > 0");
-        } else if (cli.has("radius-um")) {
-            radius = cli.num("radius-um");
-            const double lambda = cli.num("wavelength-um", 0.6), host = cli.num("host-index", 1.0);
+        if (x_arg && radius_arg) throw cli_error("give either --x or --radius-um, not both");
+        if (x_arg) {
+            x = *x_arg;
+            if (!(std::isfinite(x) && x > 0)) throw cli_error("--x = " + ex.given_text("x") + " must be a finite number > 0");
+        } else if (radius_arg) {
+            radius = *radius_arg;
             if (!(std::isfinite(radius) && radius > 0))
-                throw cli_error("--radius-um = " + cli.str("radius-um") + " must be a finite number > 0");
+                throw cli_error("--radius-um = " + ex.given_text("radius-um") + " must be a finite number > 0");
             if (!(std::isfinite(lambda) && lambda > 0))
-                throw cli_error("--wavelength-um = " + cli.str("wavelength-um") + " must be a finite number > 0");
+                throw cli_error("--wavelength-um = " + ex.given_text("wavelength-um") + " must be a finite number > 0");
             if (!(std::isfinite(host) && host > 0))
-                throw cli_error("--host-index = " + cli.str("host-index") + " must be a finite number > 0");
+                throw cli_error("--host-index = " + ex.given_text("host-index") + " must be a finite number > 0");
             x = 2 * grainlight::pi_v<double> * host * radius / lambda;
         } else {
             throw cli_error("missing --x (or --radius-um with --wavelength-um and --host-index)");
@@ -100,10 +98,8 @@ int main(int argc, char** argv) {
         if (used == "goa" && n == 1.0) throw cli_error("--n = 1 has no geometric rays; use --method mie");
         const grainlight::GoaValidity validity = grainlight::goa_validity(m, x);
 
-        const auto angles = cli.list("angles", {0, 30, 60, 90, 120, 150, 180});
         for (double a : angles)
             if (!(a >= 0 && a <= 180)) throw cli_error("--angles: " + std::to_string(a) + " is not in [0, 180] degrees");
-
         const double pi = grainlight::pi_v<double>;
         std::vector<std::complex<double>> s1, s2;
         grainlight::MieEfficiencies q;
@@ -135,9 +131,8 @@ int main(int argc, char** argv) {
                 s2.push_back(s.S2);
             }
         }
-        if (cli.has("out")) {
+        if (ex.given("out")) {
             // Angular table and plot of log10 |S1|, |S2| (the calculator's figure).
-            const auto dir = cli.out_dir();
             gl_examples::Csv csv({"theta_deg", "re_S1", "im_S1", "re_S2", "im_S2", "intensity"});
             std::optional<grainlight::LorenzMie> mie;
             std::optional<grainlight::Goa> goa;
@@ -147,27 +142,17 @@ int main(int argc, char** argv) {
                 const auto s = mie ? mie->amplitudes(i == 0 ? 1.0 : i == 360 ? -1.0 : std::cos(th)) : goa->amplitudes_at_angle(th);
                 csv.row({0.5 * i, s.S1.real(), s.S1.imag(), s.S2.real(), s.S2.imag(), std::norm(s.S1) + std::norm(s.S2)});
             }
-            const auto csv_path = dir / "mie.csv";
-            csv.write(csv_path);
-            const auto png = dir / "mie.png";
-            gl_examples::plot_with_matplotlib(
-                dir / "mie.py",
-                "d = read_csv(r'''" + csv_path.string() + "''')\n"
-                "s1 = np.hypot(d['re_S1'], d['im_S1']); s2 = np.hypot(d['re_S2'], d['im_S2'])\n"
-                "fig, ax = plt.subplots(figsize=(6, 4))\n"
-                "ax.semilogy(d['theta_deg'], s1, label='|S1|'); ax.semilogy(d['theta_deg'], s2, label='|S2|')\n"
-                "ax.set_xlabel('scattering angle [deg]'); ax.legend()\n"
-                "ax.set_title('" + used + ": m = " + cli.str("n", "1.5") + " + " + cli.str("k", "0") + " i, x = " +
-                    std::to_string(x) + "')\n"
-                "fig.tight_layout(); fig.savefig(png, dpi=110)\n",
-                png);
+            const auto csv_path = ex.csv("mie.csv", csv);
+            const std::string n_text = ex.given("n") ? ex.given_text("n") : "1.5";
+            const std::string k_text = ex.given("k") ? ex.given_text("k") : "0";
+            ex.plot("mie", csv_path, ex.out() / "mie.png",
+                    {used + ": m = " + n_text + " + " + k_text + " i, x = " + std::to_string(x)});
         }
         std::cout << "mie: m = " << n << " + " << k << " i, x = " << x << ", method " << used << "\n";
-        gl_examples::Json j;
+        gl_examples::Json j = ex.summary();
         j.num("qext", q.qext).num("qsca", q.qsca).num("qabs", q.qabs).num("qback", q.qback).num("g", q.g);
         j.raw("S1", complex_list(s1)).raw("S2", complex_list(s2)).str("method", used);
         j.boolean("goa_valid", validity.valid).num("phase_shift", validity.phase_shift);
-        std::cout << j.str() << std::endl;
-        return 0;
+        return ex.finish(j);
     });
 }

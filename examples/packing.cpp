@@ -20,36 +20,30 @@
 #include <string>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
-#include "common/progress.hpp"
+#include "common/harness.hpp"
 #include "grainlight/packing.hpp"
 
 int main(int argc, char** argv) {
-    return gl_examples::run_main("packing", [&]() -> int {
-        gl_examples::Cli cli(argc, argv, "packing",
-                             "periodic tile of equal spheres by event-driven MD (Skoge et al. 2006), checked");
-        cli.option("fraction", "packing rate in (0, 0.64)", "0.63")
-            .option("spheres", "number of spheres in the tile (>= 2)", "2000")
-            .option("growth-rate", "dimensionless Lubachevsky-Stillinger growth rate (> 0)", "0.03")
-            .common_options("");
-        cli.finish();
-        const double fraction = cli.num("fraction", 0.63);
+    const gl_examples::OutOption out_option{"", "tile FILE to write (grainlight container, kind TILE); none without it"};
+    return gl_examples::run(argc, argv, "packing",
+                            "periodic tile of equal spheres by event-driven MD (Skoge et al. 2006), checked", out_option,
+                            [&](gl_examples::Example& ex) -> int {
+        const double fraction = ex.opt<double>("fraction", 0.63, "packing rate in (0, 0.64)");
+        const std::uint64_t n = ex.opt<std::uint64_t>("spheres", 2000, "number of spheres in the tile (>= 2)");
+        grainlight::MdPackerOptions opt;
+        opt.growth_rate =
+            ex.opt<double>("growth-rate", 0.03, "dimensionless Lubachevsky-Stillinger growth rate (> 0)");
+        ex.ready(gl_examples::Example::OutKind::file);  // --out names the tile FILE
         if (!(fraction > 0 && fraction < grainlight::md_max_fraction))
-            throw gl_examples::cli_error("--fraction = " + cli.str("fraction", "0.63") +
+            throw gl_examples::cli_error("--fraction = " + (ex.given("fraction") ? ex.given_text("fraction") : "0.63") +
                                          " is outside (0, 0.64) (random close packing is ~0.64)");
-        const std::uint64_t n = cli.integer("spheres", 2000);
         if (n < 2 || n > 50000000)
             throw gl_examples::cli_error("--spheres = " + std::to_string(n) + " must be in [2, 5e7]");
-        grainlight::MdPackerOptions opt;
-        opt.growth_rate = cli.num("growth-rate", 0.03);
         if (!(opt.growth_rate > 0 && std::isfinite(opt.growth_rate)))
-            throw gl_examples::cli_error("--growth-rate = " + cli.str("growth-rate") + " must be > 0");
-        const std::uint64_t seed = cli.seed();
-        const bool full = cli.full_quality();
-        const int threads = cli.threads();
-        (void)threads;  // used by the OpenMP pragma only
-        const std::string out_file = cli.str("out", "");
+            throw gl_examples::cli_error("--growth-rate = " + ex.given_text("growth-rate") + " must be > 0");
+        const std::uint64_t seed = ex.seed();
+        const bool full = ex.full();
+        const std::string out_file = ex.out().string();
 
         // ---- pack (progress: rate reached so far) ---------------------------------------------
         const auto t0 = std::chrono::steady_clock::now();
@@ -85,20 +79,19 @@ int main(int argc, char** argv) {
         const double exact = grainlight::dixmier_mean_chord(1.0, f);
         const int blocks = 64;
         const std::uint64_t lines_per_block = full ? 500 : 100;
-        std::vector<grainlight::ChordMeasurement> parts(blocks);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-        for (int b = 0; b < blocks; ++b) {
-            grainlight::Rng rng = grainlight::Rng::from_key(seed, 0x63686f7264ull /* "chord" */, std::uint64_t(b));
-            parts[std::size_t(b)] = grainlight::measure_outer_chords(tile, lines_per_block, 50.0 * exact, rng);
-        }
-        grainlight::ChordMeasurement total;
-        for (const auto& p : parts) total.merge(p);
+        const grainlight::ChordMeasurement total = ex.parallel<grainlight::ChordMeasurement>(
+            "chords", std::uint64_t(blocks), 1,
+            [&](std::uint64_t b, std::uint64_t, std::uint64_t) {
+                grainlight::Rng rng = grainlight::Rng::from_key(seed, 0x63686f7264ull /* "chord" */, b);
+                return grainlight::measure_outer_chords(tile, lines_per_block, 50.0 * exact, rng);
+            },
+            [](grainlight::ChordMeasurement& acc, const grainlight::ChordMeasurement& p) { acc.merge(p); });
 
         std::cerr << "packing: " << n << " spheres, f = " << f << " (requested " << fraction << "), "
                   << res.collisions << " collisions, " << seconds << " s; mean outer chord " << total.mean()
                   << " R vs 4R(1-f)/(3f) = " << exact << " R (" << 100.0 * (total.mean() / exact - 1.0)
                   << " %), " << total.entries << " chords\n";
-        gl_examples::Json j;
+        gl_examples::Json j = ex.summary();
         j.num("fraction", f)
             .integer("spheres", (long long)n)
             .num("min_center_distance_over_diameter", dmin_over_d)
@@ -111,7 +104,6 @@ int main(int argc, char** argv) {
             .num("shrink_factor", res.shrink_factor)
             .integer("collisions", (long long)res.collisions)
             .integer("chords", (long long)total.entries);
-        std::cout << j.str() << std::endl;
-        return 0;
+        return ex.finish(j);
     });
 }

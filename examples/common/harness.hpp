@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <type_traits>
@@ -43,12 +44,39 @@
 
 namespace gl_examples {
 
+/// How an example documents --out on --help: its default ("" = none shown) and its help text.
+struct OutOption {
+    std::string default_out;                ///< default of --out ("" for none)
+    std::string help = "output directory";  ///< help line of --out
+};
+
 class Example {
 public:
     Example(int argc, char** argv, std::string program, std::string summary)
-        : cli_(argc, argv, program, std::move(summary)), program_(std::move(program)) {
-        for (int i = 0; i < argc; ++i) command_ += (i ? " " : "") + std::string(argv[i]);
-        cli_.common_options(default_out());
+        : Example(argc, argv, std::move(program), std::move(summary), "out") {}
+    /// As above with another default for --out (e.g. "out/<example>").
+    Example(int argc, char** argv, std::string program, std::string summary, std::string default_out)
+        : cli_(argc, argv, program, std::move(summary)), program_(std::move(program)),
+          default_out_(std::move(default_out)) {
+        for (int i = 0; i < argc; ++i) {
+            if (i) command_ += ' ';
+            command_ += argv[i];
+        }
+        cli_.common_options(default_out_);
+    }
+    /// As above with --out documented by `out` (e.g. an optional directory or a file).
+    Example(int argc, char** argv, std::string program, std::string summary, const OutOption& out)
+        : cli_(argc, argv, program, std::move(summary)), program_(std::move(program)),
+          default_out_(out.default_out.empty() ? "out" : out.default_out) {
+        for (int i = 0; i < argc; ++i) {
+            if (i) command_ += ' ';
+            command_ += argv[i];
+        }
+        // The shared options of Cli::common_options, with this --out line.
+        cli_.option("quality", "quick | full", "quick");
+        cli_.option("out", out.help, out.default_out);
+        cli_.option("seed", "random seed (unsigned integer)", "1");
+        cli_.option("threads", "worker threads (0 = all cores)", "0");
     }
 
     /// A typed option with one default: declared for --help, defaulted and parsed in one line.
@@ -62,6 +90,37 @@ public:
     T opt(const std::string& name, T quick, T full, const std::string& help) {
         cli_.option(name, help, show(quick) + " quick, " + show(full) + " full");
         return get<T>(name, full_quality() ? full : quick);
+    }
+
+    /// A typed option without a default: declared for --help, parsed when given, std::nullopt
+    /// when absent (for options such as "--x or --radius-um"). `show_default` only documents.
+    template <class T>
+    std::optional<T> opt_optional(const std::string& name, const std::string& help,
+                                  const std::string& show_default = "") {
+        cli_.option(name, help, show_default);
+        if (!cli_.has(name)) return std::nullopt;
+        return get<T>(name, T{});
+    }
+    /// Whether `--name` was given on the command line.
+    [[nodiscard]] bool given(const std::string& name) const { return cli_.has(name); }
+    /// The text given for `--name` ("" when absent), for messages that quote the argument.
+    [[nodiscard]] std::string given_text(const std::string& name) const { return cli_.str(name); }
+
+    /// What --out names: a directory (created by ready(), default "out"), a directory written
+    /// only when --out is given (created then; out() empty otherwise), or a file the example
+    /// writes itself (not created; out() empty when --out is absent).
+    enum class OutKind { directory, optional_directory, file };
+    /// ready() with the meaning of --out; ready(OutKind::directory) is ready().
+    void ready(OutKind kind) {
+        if (kind == OutKind::directory) return ready();
+        cli_.finish();
+        full_ = cli_.full_quality();
+        seed_ = cli_.seed();
+        threads_ = cli_.threads();
+        if (kind == OutKind::optional_directory && cli_.has("out"))
+            out_ = cli_.out_dir(default_out());
+        else
+            out_ = cli_.str("out", "");
     }
 
     /// Call after the last opt(): prints --help (and exits) or rejects unknown options, then
@@ -99,6 +158,11 @@ public:
             merge, std::move(init));
         bar.done();
         return p;
+    }
+
+    /// A progress bar for work that parallel() does not run (serial stages, library callbacks).
+    [[nodiscard]] ProgressBar progress(const std::string& label, std::uint64_t total) const {
+        return ProgressBar(label, total);
     }
 
     /// The JSON summary, pre-filled with what reproduces the run.
@@ -152,7 +216,7 @@ public:
     }
 
 private:
-    static std::string default_out() { return "out"; }
+    std::string default_out() const { return default_out_; }
     bool full_quality() const { return cli_.full_quality(); }
     template <class T>
     static std::string show(const T& v) {
@@ -187,7 +251,7 @@ private:
         }
     }
     Cli cli_;
-    std::string program_, command_;
+    std::string program_, command_, default_out_ = "out";
     bool full_ = false;
     std::uint64_t seed_ = 1;
     int threads_ = 1;
@@ -200,6 +264,24 @@ template <class Body>
 int run(int argc, char** argv, const char* program, const char* summary, Body&& body) {
     return run_main(program, [&]() {
         Example ex(argc, argv, program, summary);
+        return body(ex);
+    });
+}
+
+/// As above, with --out documented by `out` (see OutOption).
+template <class Body>
+int run(int argc, char** argv, const char* program, const char* summary, const OutOption& out, Body&& body) {
+    return run_main(program, [&]() {
+        Example ex(argc, argv, program, summary, out);
+        return body(ex);
+    });
+}
+
+/// As above, with another default for --out than "out".
+template <class Body>
+int run(int argc, char** argv, const char* program, const char* summary, const char* default_out, Body&& body) {
+    return run_main(program, [&]() {
+        Example ex(argc, argv, program, summary, default_out);
         return body(ex);
     });
 }
