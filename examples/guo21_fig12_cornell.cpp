@@ -28,8 +28,10 @@
 #include "common/cli.hpp"
 #include "common/output.hpp"
 #include "common/progress.hpp"
+#include "grainlight/core/color.hpp"
 #include "grainlight/integrators/discrete_vpt.hpp"
 #include "grainlight/media/discrete_particles.hpp"
+#include "grainlight/optics/ice_index.hpp"
 #include "grainlight/packing/particle_cloud.hpp"
 #include "grainlight/scene/camera.hpp"
 #include "grainlight/scene/image_io.hpp"
@@ -44,21 +46,59 @@ namespace {
 constexpr double kRadiusUm = 1000.0;
 const gl::Vec3d kLo(0.15, 0.05, 0.15), kHi(0.85, 0.75, 0.85);  // particle centres
 
+/// Reflectances of the walls (white floor/ceiling/back, "red" left, "green" right) and the
+/// light's radiance at one wavelength (or the grey values of the one-channel render).
+struct CornellColours {
+    float white = 0.7f, left = 0.45f, right = 0.35f, light = 12.0f;
+};
+
 template <class Scene>
-void build_cornell(Scene& sc, int medium, double margin) {
+void build_cornell(Scene& sc, int medium, double margin, const CornellColours& c = {}) {
     using Mat = gl::Material<float, S>;
     using Q = gl::QuadShape<float>;
     using V = gl::Vec3f;
-    sc.add_shape(Q(V(0, 0, 0), V(1, 0, 0), V(0, 0, 1)), Mat::diffuse(S(0.7f)));  // floor
-    sc.add_shape(Q(V(0, 1, 0), V(1, 0, 0), V(0, 0, 1)), Mat::diffuse(S(0.7f)));  // ceiling
-    sc.add_shape(Q(V(0, 0, 0), V(1, 0, 0), V(0, 1, 0)), Mat::diffuse(S(0.7f)));  // back
-    sc.add_shape(Q(V(0, 0, 0), V(0, 1, 0), V(0, 0, 1)), Mat::diffuse(S(0.45f)));  // left ("red")
-    sc.add_shape(Q(V(1, 0, 0), V(0, 1, 0), V(0, 0, 1)), Mat::diffuse(S(0.35f)));  // right ("green")
+    sc.add_shape(Q(V(0, 0, 0), V(1, 0, 0), V(0, 0, 1)), Mat::diffuse(S(c.white)));  // floor
+    sc.add_shape(Q(V(0, 1, 0), V(1, 0, 0), V(0, 0, 1)), Mat::diffuse(S(c.white)));  // ceiling
+    sc.add_shape(Q(V(0, 0, 0), V(1, 0, 0), V(0, 1, 0)), Mat::diffuse(S(c.white)));  // back
+    sc.add_shape(Q(V(0, 0, 0), V(0, 1, 0), V(0, 0, 1)), Mat::diffuse(S(c.left)));   // left
+    sc.add_shape(Q(V(1, 0, 0), V(0, 1, 0), V(0, 0, 1)), Mat::diffuse(S(c.right)));  // right
     // Light 0.3 x 0.3 just below the ceiling, facing down (cross(x, z) = -y).
-    sc.add_quad_light(Q(V(0.35f, 0.998f, 0.35f), V(0.3f, 0, 0), V(0, 0, 0.3f)), S(12.0f));
+    sc.add_quad_light(Q(V(0.35f, 0.998f, 0.35f), V(0.3f, 0, 0), V(0, 0, 0.3f)), S(c.light));
     const float m = float(margin);
     sc.add_shape(gl::BoxShape<float>(gl::Vec3f(kLo) - gl::Vec3f(m), gl::Vec3f(kHi) + gl::Vec3f(m)), Mat::index_matched(),
                  medium, -1);
+}
+
+/// Spectral Cornell box (Guo21 Sec. 6: 8 wavelength samples): RGB colours of the walls (linear
+/// sRGB) and the light, upsampled by Jakob & Hanika 2019 (core/color.hpp).
+struct SpectralCornell {
+    gl::SigmoidSpectrum white = gl::fit_sigmoid_spectrum(gl::Vec3d(0.7, 0.7, 0.7));
+    gl::SigmoidSpectrum red = gl::fit_sigmoid_spectrum(gl::Vec3d(0.63, 0.065, 0.05));
+    gl::SigmoidSpectrum green = gl::fit_sigmoid_spectrum(gl::Vec3d(0.14, 0.45, 0.091));
+    gl::EmissionSpectrum light = gl::fit_emission_spectrum(gl::Vec3d(12.0, 12.0, 12.0));
+    [[nodiscard]] CornellColours at(double lambda_nm) const {
+        return {float(white(lambda_nm)), float(red(lambda_nm)), float(green(lambda_nm)), float(light(lambda_nm))};
+    }
+};
+using Bins8 = gl::WavelengthBins<8>;
+
+/// Combine 8 one-channel renders (one per wavelength bin) into linear sRGB balanced to the
+/// equal-energy white (an equal-energy radiance L renders as (L, L, L)); also returns Y / int y_bar
+/// per pixel in `lum`.
+gl::Image combine_spectral(const std::vector<gl::Image>& per_lambda, std::vector<float>& lum) {
+    gl::Image out = per_lambda[0];
+    const gl::Vec3d I = gl::cie1931_cmf_integral(Bins8::lo_nm, Bins8::hi_nm);
+    const gl::Vec3d white = gl::xyz_to_linear_srgb(I);
+    const std::size_t npx = out.rgb.size() / 3;
+    lum.assign(npx, 0.0f);
+    for (std::size_t px = 0; px < npx; ++px) {
+        gl::Vec3d xyz(0.0);
+        for (std::size_t i = 0; i < 8; ++i) xyz += double(per_lambda[i].rgb[3 * px]) * Bins8::xyz_weight(i);
+        const gl::Vec3d rgb = gl::xyz_to_linear_srgb(xyz);
+        for (int c = 0; c < 3; ++c) out.rgb[3 * px + std::size_t(c)] = float(rgb[c] / white[c]);
+        lum[px] = float(xyz.y / I.y);
+    }
+    return out;
 }
 
 /// One render split into B batches of spp / B samples with different seeds (the same total cost
@@ -156,7 +196,9 @@ int main(int argc, char** argv) {
             .option("count", "number of particles", "100000")
             .option("rc-over-rp", "query radius r_c / r_p of the EPT comparison", "0.05")
             .option("batches", "independent batches per render (variance, time to unit variance)", "8")
-            .option("paper-k", "1: also render ours -FD at the paper's k = 0.5 and 1; 0: skip", "1");
+            .option("paper-k", "1: also render ours -FD at the paper's k = 0.5 and 1; 0: skip", "1")
+            .option("spectral", "1: also render EPT, ours and ours -FD at 8 wavelengths (ice index of Warren & Brandt "
+                                "2008, coloured walls, CIE 1931 -> sRGB; spp / 8 per wavelength) (default 1 full, 0 quick)");
         cli.finish();
         const bool full = cli.full_quality();
         const auto out = cli.out_dir("out/guo21_fig12_cornell");
@@ -173,6 +215,7 @@ int main(int argc, char** argv) {
         const int batches = int(cli.integer("batches", 8));
         if (batches < 2 || batches > 64 || batches > spp) throw gl_examples::cli_error("--batches must be in [2, min(64, spp)]");
         const bool paper_k = cli.integer("paper-k", 1) != 0;
+        const bool spectral = cli.integer("spectral", full ? 1 : 0) != 0;
 
         const gl::PinholeCamera<float> camera(gl::Vec3f(0.5f, 0.5f, 2.3f), gl::Vec3f(0.5f, 0.5f, 0.0f), gl::Vec3f(0, 1, 0), 38.0f,
                                               width, width);
@@ -245,6 +288,65 @@ int main(int argc, char** argv) {
         const Run fd_k05 = paper_k ? render_ours(rc05, false, "ours -FD k=0.5", false) : Run{ours_fd};
         const Run fd_k1 = paper_k ? render_ours(rc1, false, "ours -FD k=1", false) : Run{ours_fd};
 
+        // Spectral renders: 8 wavelength bins, each a one-channel render at spp / 8 with the
+        // particles' optics (and EPT's sphere index) at that wavelength.
+        struct SpectralRun {
+            gl::Image img;
+            std::vector<float> lum;
+            double seconds = 0, mean_luminance = 0;
+        };
+        const SpectralCornell colours;
+        const int spp_lambda = std::max(1, spp / 8);
+        auto render_spectral = [&](int kind, const std::string& label) {  // 0 EPT, 1 ours, 2 ours -FD
+            SpectralRun sr;
+            std::vector<gl::Image> per;
+            gl_examples::ProgressBar bar(label, std::uint64_t(width) * 8);
+            const auto t0 = std::chrono::steady_clock::now();
+            gl::ParticleGridSettings gs;
+            gs.dilation = kind == 0 ? 0.0 : r_c;
+            auto grid = std::make_shared<gl::ParticleGrid>(*cloud, gs);
+            for (std::size_t i = 0; i < 8; ++i) {
+                const double lnm = Bins8::lambda_nm(i);
+                const auto m_ice = gl::ice_refractive_index(lnm * 1e-3);
+                gl::RenderOptions o = opt;
+                o.spp = spp_lambda;
+                o.seed = opt.seed * 1000003ull + 104729ull * (i + 1);
+                auto prog = [&](int n) { bar.advance(std::uint64_t(n)); };
+                if (kind == 0) {
+                    using M = gl::ExplicitSphereMedium<float>;
+                    gl::Scene<M> sc;
+                    build_cornell(sc, sc.add_medium(M(grid, float(m_ice.real()))), 1.5 * r_p, colours.at(lnm));
+                    per.push_back(gl::render_discrete_vpt(sc, camera, o, prog).image());
+                } else {
+                    gl::ParticleModel mi = model;
+                    mi.particle_index = m_ice;
+                    gl::DiscreteMediumSettings ms;
+                    ms.query_radius = r_c;
+                    ms.diffraction = kind == 1;
+                    ms.wavelength_um = lnm * 1e-3;
+                    using M = gl::DiscreteParticleMedium<float>;
+                    gl::Scene<M> sc;
+                    build_cornell(sc, sc.add_medium(M(grid, {mi}, ms)), 1.5 * r_p + r_c, colours.at(lnm));
+                    per.push_back(gl::render_discrete_vpt(sc, camera, o, prog).image());
+                }
+            }
+            sr.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            bar.done();
+            sr.img = combine_spectral(per, sr.lum);
+            double s = 0;
+            std::size_t n = 0;
+            for (std::size_t px = 0; px < mask.size(); ++px)
+                if (mask[px]) s += sr.lum[px], ++n;
+            sr.mean_luminance = n ? s / double(n) : 0.0;
+            return sr;
+        };
+        SpectralRun sp_ept, sp_ours, sp_fd;
+        if (spectral) {
+            sp_ept = render_spectral(0, "EPT spectral");
+            sp_ours = render_spectral(1, "ours spectral");
+            sp_fd = render_spectral(2, "ours -FD spectral");
+        }
+
         gl::Image fd_only = ours.img;
         for (std::size_t i = 0; i < fd_only.rgb.size(); ++i) fd_only.rgb[i] = std::abs(ours.img.rgb[i] - ours_fd.img.rgb[i]);
         const double m_ept = masked_mean(ept.img, mask), m_ours = masked_mean(ours.img, mask), m_fd = masked_mean(ours_fd.img, mask);
@@ -260,6 +362,15 @@ int main(int argc, char** argv) {
         gl::write_png(out / "fd_only.png", fd_only, {ev + 3});
         gl::write_png(out / "ours_no_diffraction_k05.png", fd_k05.img, {ev});
         gl::write_png(out / "ours_no_diffraction_k1.png", fd_k1.img, {ev});
+        if (spectral) {
+            const double evs = std::log2(0.18 / std::max(sp_ept.mean_luminance, 1e-12));
+            gl::write_exr(out / "ept_spectral.exr", sp_ept.img);
+            gl::write_png(out / "ept_spectral.png", sp_ept.img, {evs});
+            gl::write_exr(out / "ours_spectral.exr", sp_ours.img);
+            gl::write_png(out / "ours_spectral.png", sp_ours.img, {evs});
+            gl::write_exr(out / "ours_no_diffraction_spectral.exr", sp_fd.img);
+            gl::write_png(out / "ours_no_diffraction_spectral.png", sp_fd.img, {evs});
+        }
 
         // Predicted mean-extinction factor of the membership rule for -FD (C_t = pi r_p^2):
         // (1 + r_p/r_c)^2 (1 - e^-c)/c, c = (r_p/r_c)^2; -> (1 + r_c/r_p)^2 for r_c << r_p (opaque members).
@@ -291,6 +402,13 @@ int main(int argc, char** argv) {
                     ours_fd.var_half_ratio, m_fd - m_ept, std::hypot(ours_fd.mean_se, ept.mean_se));
         std::printf("  memory of ours: %.1f MB (%.1f bytes per particle: 16 cloud + grid); paper Table 1: 60 MB\n", memory_mb,
                     bytes_pp);
+        if (spectral)
+            std::printf("  spectral (8 bins 380-780 nm, %d spp each, ice n = %.4f..%.4f, Jakob-Hanika walls; mean Y over the\n"
+                        "  same pixels): EPT %.5g, ours %.5g (%+.4f), ours -FD %.5g (%+.4f); %.1f / %.1f / %.1f s\n",
+                        spp_lambda, gl::ice_refractive_index(Bins8::lambda_nm(0) * 1e-3).real(),
+                        gl::ice_refractive_index(Bins8::lambda_nm(7) * 1e-3).real(), sp_ept.mean_luminance,
+                        sp_ours.mean_luminance, sp_ours.mean_luminance / sp_ept.mean_luminance - 1, sp_fd.mean_luminance,
+                        sp_fd.mean_luminance / sp_ept.mean_luminance - 1, sp_ept.seconds, sp_ours.seconds, sp_fd.seconds);
         std::printf("  paper: -FD is close to the full model; the FD-only image shows subtle differences (Fraunhofer's\n"
                     "  lobe at 1000 um is ~0.03 deg wide: r^2/lambda = 1.8 m, the box is in the particles' near field)\n");
 
@@ -332,9 +450,18 @@ int main(int argc, char** argv) {
             .num("bias_no_diffraction", m_fd - m_ept)
             .num("bias_no_diffraction_se", std::hypot(ours_fd.mean_se, ept.mean_se))
             .integer("batches", batches)
+            .integer("spectral", spectral ? 1 : 0)
             .num("paper_time_ratio", 1.2)
             .num("memory_mb_discrete", memory_mb)
             .num("bytes_per_particle", bytes_pp);
+        if (spectral)
+            j.num("mean_luminance_ept_spectral", sp_ept.mean_luminance)
+                .num("mean_luminance_discrete_spectral", sp_ours.mean_luminance)
+                .num("mean_luminance_discrete_no_diffraction_spectral", sp_fd.mean_luminance)
+                .num("rel_diff_no_diffraction_spectral", sp_fd.mean_luminance / sp_ept.mean_luminance - 1)
+                .num("rel_diff_discrete_spectral", sp_ours.mean_luminance / sp_ept.mean_luminance - 1)
+                .num("seconds_ept_spectral", sp_ept.seconds)
+                .num("seconds_discrete_spectral", sp_ours.seconds);
         std::cout << j.str() << std::endl;
         return 0;
     });
