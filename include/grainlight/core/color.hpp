@@ -34,9 +34,9 @@ namespace grainlight {
 
 /// CIE 1931 2-degree colour-matching functions, 5 nm steps from 380 nm (CIE 15:2004).
 struct Cie1931Table {
-    static constexpr double lambda_min_nm = 380.0;
-    static constexpr double step_nm = 5.0;
-    static constexpr std::size_t size = 81;
+    static constexpr double lambda_min_nm = 380.0;  ///< first wavelength [nm]
+    static constexpr double step_nm = 5.0;          ///< wavelength step [nm]
+    static constexpr std::size_t size = 81;         ///< rows (380 .. 780 nm)
     /// x_bar(lambda_min + i step)
     static constexpr std::array<double, size> x_bar = {
         0.001368, 0.002236, 0.004243, 0.007650, 0.014310, 0.023190, 0.043510, 0.077630,
@@ -131,7 +131,8 @@ struct Cie1931Table {
 template <std::size_t N>
 struct WavelengthBins {
     static_assert(N >= 1, "at least one bin");
-    static constexpr double lo_nm = 380.0, hi_nm = 780.0;
+    static constexpr double lo_nm = 380.0;  ///< lower end of the first bin [nm]
+    static constexpr double hi_nm = 780.0;  ///< upper end of the last bin [nm]
     /// Centre of bin i [nm].
     [[nodiscard]] static constexpr double lambda_nm(std::size_t i) noexcept {
         return lo_nm + (double(i) + 0.5) * (hi_nm - lo_nm) / double(N);
@@ -158,7 +159,9 @@ struct WavelengthBins {
 
 /// Jakob-Hanika sigmoid-polynomial spectrum (see the file comment); values in (0, 1).
 struct SigmoidSpectrum {
-    double c0 = 0, c1 = 0, c2 = 0;  ///< coefficients of t^2, t, 1 with t = (lambda - 380) / 400
+    double c0 = 0;  ///< coefficient of t^2, t = (lambda - 380 nm) / 400 nm
+    double c1 = 0;  ///< coefficient of t
+    double c2 = 0;  ///< constant term
     /// R(lambda), lambda in nm.
     [[nodiscard]] double operator()(double lambda_nm) const noexcept {
         const double t = (lambda_nm - 380.0) / 400.0;

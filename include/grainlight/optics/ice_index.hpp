@@ -20,8 +20,11 @@ namespace grainlight {
 struct IceIndexTable {
     /// One row of the table.
     struct Row {
-        double lambda_um, n, k;
+        double lambda_um;  ///< vacuum wavelength [um]
+        double n;          ///< real part
+        double k;          ///< imaginary part (>= 0 absorbing)
     };
+    /// Number of rows.
     static constexpr std::size_t size = 47;
     /// Rows in increasing wavelength.
     static constexpr std::array<Row, size> rows = {{
