@@ -19,6 +19,7 @@
 // predicted extinction factors, seconds_ept, seconds_discrete, time ratio, memory_mb_discrete,
 // bytes_per_particle.
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -27,8 +28,10 @@
 #include "common/cli.hpp"
 #include "common/output.hpp"
 #include "common/progress.hpp"
+#include "grainlight/core/color.hpp"
 #include "grainlight/integrators/discrete_vpt.hpp"
 #include "grainlight/media/discrete_particles.hpp"
+#include "grainlight/optics/ice_index.hpp"
 #include "grainlight/packing/particle_cloud.hpp"
 #include "grainlight/scene/camera.hpp"
 #include "grainlight/scene/image_io.hpp"
@@ -43,27 +46,133 @@ namespace {
 constexpr double kRadiusUm = 1000.0;
 const gl::Vec3d kLo(0.15, 0.05, 0.15), kHi(0.85, 0.75, 0.85);  // particle centres
 
+/// Reflectances of the walls (white floor/ceiling/back, "red" left, "green" right) and the
+/// light's radiance at one wavelength (or the grey values of the one-channel render).
+struct CornellColours {
+    float white = 0.7f, left = 0.45f, right = 0.35f, light = 12.0f;
+};
+
 template <class Scene>
-void build_cornell(Scene& sc, int medium, double margin) {
+void build_cornell(Scene& sc, int medium, double margin, const CornellColours& c = {}) {
     using Mat = gl::Material<float, S>;
     using Q = gl::QuadShape<float>;
     using V = gl::Vec3f;
-    sc.add_shape(Q(V(0, 0, 0), V(1, 0, 0), V(0, 0, 1)), Mat::diffuse(S(0.7f)));  // floor
-    sc.add_shape(Q(V(0, 1, 0), V(1, 0, 0), V(0, 0, 1)), Mat::diffuse(S(0.7f)));  // ceiling
-    sc.add_shape(Q(V(0, 0, 0), V(1, 0, 0), V(0, 1, 0)), Mat::diffuse(S(0.7f)));  // back
-    sc.add_shape(Q(V(0, 0, 0), V(0, 1, 0), V(0, 0, 1)), Mat::diffuse(S(0.45f)));  // left ("red")
-    sc.add_shape(Q(V(1, 0, 0), V(0, 1, 0), V(0, 0, 1)), Mat::diffuse(S(0.35f)));  // right ("green")
+    sc.add_shape(Q(V(0, 0, 0), V(1, 0, 0), V(0, 0, 1)), Mat::diffuse(S(c.white)));  // floor
+    sc.add_shape(Q(V(0, 1, 0), V(1, 0, 0), V(0, 0, 1)), Mat::diffuse(S(c.white)));  // ceiling
+    sc.add_shape(Q(V(0, 0, 0), V(1, 0, 0), V(0, 1, 0)), Mat::diffuse(S(c.white)));  // back
+    sc.add_shape(Q(V(0, 0, 0), V(0, 1, 0), V(0, 0, 1)), Mat::diffuse(S(c.left)));   // left
+    sc.add_shape(Q(V(1, 0, 0), V(0, 1, 0), V(0, 0, 1)), Mat::diffuse(S(c.right)));  // right
     // Light 0.3 x 0.3 just below the ceiling, facing down (cross(x, z) = -y).
-    sc.add_quad_light(Q(V(0.35f, 0.998f, 0.35f), V(0.3f, 0, 0), V(0, 0, 0.3f)), S(12.0f));
+    sc.add_quad_light(Q(V(0.35f, 0.998f, 0.35f), V(0.3f, 0, 0), V(0, 0, 0.3f)), S(c.light));
     const float m = float(margin);
     sc.add_shape(gl::BoxShape<float>(gl::Vec3f(kLo) - gl::Vec3f(m), gl::Vec3f(kHi) + gl::Vec3f(m)), Mat::index_matched(),
                  medium, -1);
 }
 
+/// Spectral Cornell box (Guo21 Sec. 6: 8 wavelength samples): RGB colours of the walls (linear
+/// sRGB) and the light, upsampled by Jakob & Hanika 2019 (core/color.hpp).
+struct SpectralCornell {
+    gl::SigmoidSpectrum white = gl::fit_sigmoid_spectrum(gl::Vec3d(0.7, 0.7, 0.7));
+    gl::SigmoidSpectrum red = gl::fit_sigmoid_spectrum(gl::Vec3d(0.63, 0.065, 0.05));
+    gl::SigmoidSpectrum green = gl::fit_sigmoid_spectrum(gl::Vec3d(0.14, 0.45, 0.091));
+    gl::EmissionSpectrum light = gl::fit_emission_spectrum(gl::Vec3d(12.0, 12.0, 12.0));
+    [[nodiscard]] CornellColours at(double lambda_nm) const {
+        return {float(white(lambda_nm)), float(red(lambda_nm)), float(green(lambda_nm)), float(light(lambda_nm))};
+    }
+};
+using Bins8 = gl::WavelengthBins<8>;
+
+/// Combine 8 one-channel renders (one per wavelength bin) into linear sRGB balanced to the
+/// equal-energy white (an equal-energy radiance L renders as (L, L, L)); also returns Y / int y_bar
+/// per pixel in `lum`.
+gl::Image combine_spectral(const std::vector<gl::Image>& per_lambda, std::vector<float>& lum) {
+    gl::Image out = per_lambda[0];
+    const gl::Vec3d I = gl::cie1931_cmf_integral(Bins8::lo_nm, Bins8::hi_nm);
+    const gl::Vec3d white = gl::xyz_to_linear_srgb(I);
+    const std::size_t npx = out.rgb.size() / 3;
+    lum.assign(npx, 0.0f);
+    for (std::size_t px = 0; px < npx; ++px) {
+        gl::Vec3d xyz(0.0);
+        for (std::size_t i = 0; i < 8; ++i) xyz += double(per_lambda[i].rgb[3 * px]) * Bins8::xyz_weight(i);
+        const gl::Vec3d rgb = gl::xyz_to_linear_srgb(xyz);
+        for (int c = 0; c < 3; ++c) out.rgb[3 * px + std::size_t(c)] = float(rgb[c] / white[c]);
+        lum[px] = float(xyz.y / I.y);
+    }
+    return out;
+}
+
+/// One render split into B batches of spp / B samples with different seeds (the same total cost
+/// as one render): the mean image, the per-sample variance over the masked pixels from the batch
+/// scatter (measuring.md: time to unit variance), wall and process CPU seconds.
 struct Run {
     gl::Image img;
-    double seconds = 0;
+    double seconds = 0, cpu_seconds = 0;
+    double var_per_sample = 0;          ///< mean over masked pixels of the per-sample variance
+    double var_half_ratio = 0;          ///< variance estimate of batches 0..B/2-1 over B/2..B-1
+    double mean_se = 0;                 ///< standard error of the masked mean (from the batches)
+    int spp = 0;
+    /// Time to unit variance: per-sample variance x CPU seconds per sample (per pixel).
+    [[nodiscard]] double ttuv(std::size_t pixels) const { return var_per_sample * cpu_seconds / (double(spp) * double(pixels)); }
 };
+
+template <class Render>
+Run render_batches(int batches, const gl::RenderOptions& base, const std::vector<char>& mask, const std::string& label,
+                   int rows, Render&& render) {
+    Run r;
+    gl_examples::ProgressBar bar(label, std::uint64_t(rows) * std::uint64_t(batches));
+    std::vector<gl::Image> imgs;
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::clock_t c0 = std::clock();
+    const int spp_b = std::max(1, base.spp / batches);
+    for (int b = 0; b < batches; ++b) {
+        gl::RenderOptions o = base;
+        o.spp = spp_b;
+        o.seed = base.seed * 1000003ull + std::uint64_t(b) * 7919ull + 1;
+        imgs.push_back(render(o, [&](int n) { bar.advance(std::uint64_t(n)); }));
+    }
+    r.cpu_seconds = double(std::clock() - c0) / CLOCKS_PER_SEC;
+    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    bar.done();
+    r.spp = spp_b * batches;
+    r.img = imgs[0];
+    for (std::size_t i = 0; i < r.img.rgb.size(); ++i) {
+        double s = 0;
+        for (const auto& im : imgs) s += im.rgb[i];
+        r.img.rgb[i] = float(s / batches);
+    }
+    // Batch variance per masked pixel (channel 0; grey renders), and of the masked mean.
+    auto var_of = [&](int b0, int b1) {
+        double v = 0;
+        std::size_t n = 0;
+        for (std::size_t px = 0; px < mask.size(); ++px) {
+            if (!mask[px]) continue;
+            double m = 0;
+            for (int b = b0; b < b1; ++b) m += imgs[std::size_t(b)].rgb[3 * px];
+            m /= (b1 - b0);
+            double q = 0;
+            for (int b = b0; b < b1; ++b) q += (imgs[std::size_t(b)].rgb[3 * px] - m) * (imgs[std::size_t(b)].rgb[3 * px] - m);
+            v += q / (b1 - b0 - 1);
+            ++n;
+        }
+        return n ? v / double(n) * spp_b : 0.0;
+    };
+    r.var_per_sample = var_of(0, batches);
+    r.var_half_ratio = batches >= 4 ? var_of(0, batches / 2) / std::max(var_of(batches / 2, batches), 1e-300) : 1.0;
+    std::vector<double> means;
+    for (const auto& im : imgs) {
+        double s = 0;
+        std::size_t n = 0;
+        for (std::size_t px = 0; px < mask.size(); ++px)
+            if (mask[px]) s += im.rgb[3 * px], ++n;
+        means.push_back(n ? s / double(n) : 0.0);
+    }
+    double mm = 0, vv = 0;
+    for (double m : means) mm += m;
+    mm /= double(batches);
+    for (double m : means) vv += (m - mm) * (m - mm);
+    r.mean_se = std::sqrt(vv / (batches - 1) / batches);
+    return r;
+}
 
 /// Mean over the pixels whose centre ray passes through the cloud's box and does not see the
 /// light directly (the light's own radiance would otherwise dominate the image mean).
@@ -85,7 +194,11 @@ int main(int argc, char** argv) {
             .option("spp", "samples per pixel (default 32 quick, 512 full)")
             .option("width", "image width = height (default 64 quick, 512 full)")
             .option("count", "number of particles", "100000")
-            .option("rc-over-rp", "query radius r_c / r_p of the EPT comparison", "0.05");
+            .option("rc-over-rp", "query radius r_c / r_p of the EPT comparison", "0.05")
+            .option("batches", "independent batches per render (variance, time to unit variance)", "8")
+            .option("paper-k", "1: also render ours -FD at the paper's k = 0.5 and 1; 0: skip", "1")
+            .option("spectral", "1: also render EPT, ours and ours -FD at 8 wavelengths (ice index of Warren & Brandt "
+                                "2008, coloured walls, CIE 1931 -> sRGB; spp / 8 per wavelength) (default 1 full, 0 quick)");
         cli.finish();
         const bool full = cli.full_quality();
         const auto out = cli.out_dir("out/guo21_fig12_cornell");
@@ -99,6 +212,10 @@ int main(int argc, char** argv) {
         const double rc_over_rp = cli.num("rc-over-rp", 0.05);
         if (!(rc_over_rp > 0 && rc_over_rp <= 10)) throw gl_examples::cli_error("--rc-over-rp must be in (0, 10]");
         const double r_p = kRadiusUm * 1e-6;
+        const int batches = int(cli.integer("batches", 8));
+        if (batches < 2 || batches > 64 || batches > spp) throw gl_examples::cli_error("--batches must be in [2, min(64, spp)]");
+        const bool paper_k = cli.integer("paper-k", 1) != 0;
+        const bool spectral = cli.integer("spectral", full ? 1 : 0) != 0;
 
         const gl::PinholeCamera<float> camera(gl::Vec3f(0.5f, 0.5f, 2.3f), gl::Vec3f(0.5f, 0.5f, 0.0f), gl::Vec3f(0, 1, 0), 38.0f,
                                               width, width);
@@ -140,15 +257,13 @@ int main(int argc, char** argv) {
             using M = gl::ExplicitSphereMedium<float>;
             gl::Scene<M> sc;
             build_cornell(sc, sc.add_medium(M(grid, 1.31f)), 1.5 * r_p);
-            gl_examples::ProgressBar bar("EPT", std::uint64_t(width));
-            const auto t0 = std::chrono::steady_clock::now();
-            ept.img = gl::render_discrete_vpt(sc, camera, opt, [&](int n) { bar.advance(std::uint64_t(n)); }).image();
-            ept.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-            bar.done();
+            ept = render_batches(batches, opt, mask, "EPT", width, [&](const gl::RenderOptions& o, auto&& prog) {
+                return gl::render_discrete_vpt(sc, camera, o, prog).image();
+            });
         }
         // Ours with and without diffraction at r_c.
         double memory_mb = 0, bytes_pp = 0;
-        auto render_ours = [&](double r_c, bool diffraction, const std::string& label) {
+        auto render_ours = [&](double r_c, bool diffraction, const std::string& label, bool record_memory) {
             gl::ParticleGridSettings gs;
             gs.dilation = r_c;
             auto grid = std::make_shared<gl::ParticleGrid>(*cloud, gs);
@@ -158,22 +273,79 @@ int main(int argc, char** argv) {
             using M = gl::DiscreteParticleMedium<float>;
             gl::Scene<M> sc;
             build_cornell(sc, sc.add_medium(M(grid, {model}, ms)), 1.5 * r_p + r_c);
-            memory_mb = double(sc.medium(0).memory_bytes()) / (1024.0 * 1024.0);
-            bytes_pp = double(sc.medium(0).memory_bytes()) / double(count);
-            gl_examples::ProgressBar bar(label, std::uint64_t(width));
-            Run r;
-            const auto t0 = std::chrono::steady_clock::now();
-            r.img = gl::render_discrete_vpt(sc, camera, opt, [&](int n) { bar.advance(std::uint64_t(n)); }).image();
-            r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-            bar.done();
-            return r;
+            if (record_memory) {
+                memory_mb = double(sc.medium(0).memory_bytes()) / (1024.0 * 1024.0);
+                bytes_pp = double(sc.medium(0).memory_bytes()) / double(count);
+            }
+            return render_batches(batches, opt, mask, label, width, [&](const gl::RenderOptions& o, auto&& prog) {
+                return gl::render_discrete_vpt(sc, camera, o, prog).image();
+            });
         };
         const double r_c = rc_over_rp * r_p;
-        const Run ours = render_ours(r_c, true, "ours");
-        const Run ours_fd = render_ours(r_c, false, "ours -FD");
+        const Run ours = render_ours(r_c, true, "ours", true);
+        const Run ours_fd = render_ours(r_c, false, "ours -FD", false);
         const double rc05 = rc_of(0.5), rc1 = rc_of(1.0);
-        const Run fd_k05 = render_ours(rc05, false, "ours -FD k=0.5");
-        const Run fd_k1 = render_ours(rc1, false, "ours -FD k=1");
+        const Run fd_k05 = paper_k ? render_ours(rc05, false, "ours -FD k=0.5", false) : Run{ours_fd};
+        const Run fd_k1 = paper_k ? render_ours(rc1, false, "ours -FD k=1", false) : Run{ours_fd};
+
+        // Spectral renders: 8 wavelength bins, each a one-channel render at spp / 8 with the
+        // particles' optics (and EPT's sphere index) at that wavelength.
+        struct SpectralRun {
+            gl::Image img;
+            std::vector<float> lum;
+            double seconds = 0, mean_luminance = 0;
+        };
+        const SpectralCornell colours;
+        const int spp_lambda = std::max(1, spp / 8);
+        auto render_spectral = [&](int kind, const std::string& label) {  // 0 EPT, 1 ours, 2 ours -FD
+            SpectralRun sr;
+            std::vector<gl::Image> per;
+            gl_examples::ProgressBar bar(label, std::uint64_t(width) * 8);
+            const auto t0 = std::chrono::steady_clock::now();
+            gl::ParticleGridSettings gs;
+            gs.dilation = kind == 0 ? 0.0 : r_c;
+            auto grid = std::make_shared<gl::ParticleGrid>(*cloud, gs);
+            for (std::size_t i = 0; i < 8; ++i) {
+                const double lnm = Bins8::lambda_nm(i);
+                const auto m_ice = gl::ice_refractive_index(lnm * 1e-3);
+                gl::RenderOptions o = opt;
+                o.spp = spp_lambda;
+                o.seed = opt.seed * 1000003ull + 104729ull * (i + 1);
+                auto prog = [&](int n) { bar.advance(std::uint64_t(n)); };
+                if (kind == 0) {
+                    using M = gl::ExplicitSphereMedium<float>;
+                    gl::Scene<M> sc;
+                    build_cornell(sc, sc.add_medium(M(grid, float(m_ice.real()))), 1.5 * r_p, colours.at(lnm));
+                    per.push_back(gl::render_discrete_vpt(sc, camera, o, prog).image());
+                } else {
+                    gl::ParticleModel mi = model;
+                    mi.particle_index = m_ice;
+                    gl::DiscreteMediumSettings ms;
+                    ms.query_radius = r_c;
+                    ms.diffraction = kind == 1;
+                    ms.wavelength_um = lnm * 1e-3;
+                    using M = gl::DiscreteParticleMedium<float>;
+                    gl::Scene<M> sc;
+                    build_cornell(sc, sc.add_medium(M(grid, {mi}, ms)), 1.5 * r_p + r_c, colours.at(lnm));
+                    per.push_back(gl::render_discrete_vpt(sc, camera, o, prog).image());
+                }
+            }
+            sr.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            bar.done();
+            sr.img = combine_spectral(per, sr.lum);
+            double s = 0;
+            std::size_t n = 0;
+            for (std::size_t px = 0; px < mask.size(); ++px)
+                if (mask[px]) s += sr.lum[px], ++n;
+            sr.mean_luminance = n ? s / double(n) : 0.0;
+            return sr;
+        };
+        SpectralRun sp_ept, sp_ours, sp_fd;
+        if (spectral) {
+            sp_ept = render_spectral(0, "EPT spectral");
+            sp_ours = render_spectral(1, "ours spectral");
+            sp_fd = render_spectral(2, "ours -FD spectral");
+        }
 
         gl::Image fd_only = ours.img;
         for (std::size_t i = 0; i < fd_only.rgb.size(); ++i) fd_only.rgb[i] = std::abs(ours.img.rgb[i] - ours_fd.img.rgb[i]);
@@ -190,6 +362,15 @@ int main(int argc, char** argv) {
         gl::write_png(out / "fd_only.png", fd_only, {ev + 3});
         gl::write_png(out / "ours_no_diffraction_k05.png", fd_k05.img, {ev});
         gl::write_png(out / "ours_no_diffraction_k1.png", fd_k1.img, {ev});
+        if (spectral) {
+            const double evs = std::log2(0.18 / std::max(sp_ept.mean_luminance, 1e-12));
+            gl::write_exr(out / "ept_spectral.exr", sp_ept.img);
+            gl::write_png(out / "ept_spectral.png", sp_ept.img, {evs});
+            gl::write_exr(out / "ours_spectral.exr", sp_ours.img);
+            gl::write_png(out / "ours_spectral.png", sp_ours.img, {evs});
+            gl::write_exr(out / "ours_no_diffraction_spectral.exr", sp_fd.img);
+            gl::write_png(out / "ours_no_diffraction_spectral.png", sp_fd.img, {evs});
+        }
 
         // Predicted mean-extinction factor of the membership rule for -FD (C_t = pi r_p^2):
         // (1 + r_p/r_c)^2 (1 - e^-c)/c, c = (r_p/r_c)^2; -> (1 + r_c/r_p)^2 for r_c << r_p (opaque members).
@@ -208,10 +389,26 @@ int main(int argc, char** argv) {
                     m_k05 / m_ept - 1, fd_k05.seconds, f05);
         std::printf("  %-34s %12.6g %+10.4f %10.1f %24.4f\n", "ours -FD, k = 1", m_k1, m_k1 / m_ept - 1,
                     fd_k1.seconds, f1);
-        std::printf("  time EPT / ours = %.2fx (paper: 1.2x for this scene at 1024 spp; same spp here, not equal error)\n",
-                    ept.seconds / ours.seconds);
+        std::size_t npix = 0;
+        for (const char c : mask) npix += c ? 1 : 0;
+        const double tt_ept = ept.ttuv(npix), tt_ours = ours.ttuv(npix), tt_fd = ours_fd.ttuv(npix);
+        std::printf("  time EPT / ours at equal spp (CPU seconds): %.2fx with diffraction, %.2fx -FD (paper: 1.2x at 1e5,\n"
+                    "  Fig. 20: >= 2x from 1e6 on)\n",
+                    ept.cpu_seconds / ours.cpu_seconds, ept.cpu_seconds / ours_fd.cpu_seconds);
+        std::printf("  time to unit variance (per-sample variance x CPU s per sample, %d batches, masked pixels):\n"
+                    "    EPT %.3g, ours %.3g, ours -FD %.3g -> speed-up EPT / ours %.2fx, EPT / ours -FD %.2fx\n"
+                    "    (variance halves agree: EPT %.2f, ours %.2f, ours -FD %.2f; bias of ours -FD vs EPT %+.4f +- %.4f)\n",
+                    batches, tt_ept, tt_ours, tt_fd, tt_ept / tt_ours, tt_ept / tt_fd, ept.var_half_ratio, ours.var_half_ratio,
+                    ours_fd.var_half_ratio, m_fd - m_ept, std::hypot(ours_fd.mean_se, ept.mean_se));
         std::printf("  memory of ours: %.1f MB (%.1f bytes per particle: 16 cloud + grid); paper Table 1: 60 MB\n", memory_mb,
                     bytes_pp);
+        if (spectral)
+            std::printf("  spectral (8 bins 380-780 nm, %d spp each, ice n = %.4f..%.4f, Jakob-Hanika walls; mean Y over the\n"
+                        "  same pixels): EPT %.5g, ours %.5g (%+.4f), ours -FD %.5g (%+.4f); %.1f / %.1f / %.1f s\n",
+                        spp_lambda, gl::ice_refractive_index(Bins8::lambda_nm(0) * 1e-3).real(),
+                        gl::ice_refractive_index(Bins8::lambda_nm(7) * 1e-3).real(), sp_ept.mean_luminance,
+                        sp_ours.mean_luminance, sp_ours.mean_luminance / sp_ept.mean_luminance - 1, sp_fd.mean_luminance,
+                        sp_fd.mean_luminance / sp_ept.mean_luminance - 1, sp_ept.seconds, sp_ours.seconds, sp_fd.seconds);
         std::printf("  paper: -FD is close to the full model; the FD-only image shows subtle differences (Fraunhofer's\n"
                     "  lobe at 1000 um is ~0.03 deg wide: r^2/lambda = 1.8 m, the box is in the particles' near field)\n");
 
@@ -239,10 +436,32 @@ int main(int argc, char** argv) {
             .num("seconds_ept", ept.seconds)
             .num("seconds_discrete", ours.seconds)
             .num("seconds_discrete_no_diffraction", ours_fd.seconds)
-            .num("time_ratio_ept_over_discrete", ept.seconds / ours.seconds)
+            .num("time_ratio_ept_over_discrete", ept.cpu_seconds / ours.cpu_seconds)
+            .num("time_ratio_ept_over_discrete_no_diffraction", ept.cpu_seconds / ours_fd.cpu_seconds)
+            .num("cpu_seconds_ept", ept.cpu_seconds)
+            .num("cpu_seconds_discrete", ours.cpu_seconds)
+            .num("cpu_seconds_discrete_no_diffraction", ours_fd.cpu_seconds)
+            .num("ttuv_ept", tt_ept)
+            .num("ttuv_discrete", tt_ours)
+            .num("ttuv_discrete_no_diffraction", tt_fd)
+            .num("ttuv_speedup_discrete", tt_ept / tt_ours)
+            .num("ttuv_speedup_discrete_no_diffraction", tt_ept / tt_fd)
+            .num("variance_half_ratio_ept", ept.var_half_ratio)
+            .num("bias_no_diffraction", m_fd - m_ept)
+            .num("bias_no_diffraction_se", std::hypot(ours_fd.mean_se, ept.mean_se))
+            .integer("batches", batches)
+            .integer("spectral", spectral ? 1 : 0)
             .num("paper_time_ratio", 1.2)
             .num("memory_mb_discrete", memory_mb)
             .num("bytes_per_particle", bytes_pp);
+        if (spectral)
+            j.num("mean_luminance_ept_spectral", sp_ept.mean_luminance)
+                .num("mean_luminance_discrete_spectral", sp_ours.mean_luminance)
+                .num("mean_luminance_discrete_no_diffraction_spectral", sp_fd.mean_luminance)
+                .num("rel_diff_no_diffraction_spectral", sp_fd.mean_luminance / sp_ept.mean_luminance - 1)
+                .num("rel_diff_discrete_spectral", sp_ours.mean_luminance / sp_ept.mean_luminance - 1)
+                .num("seconds_ept_spectral", sp_ept.seconds)
+                .num("seconds_discrete_spectral", sp_ours.seconds);
         std::cout << j.str() << std::endl;
         return 0;
     });

@@ -148,20 +148,46 @@ public:
     }
 
     /// Walk the voxels crossed by o + t d (unit d), t in [t_min, t_max], in order:
-    /// visit(refs, t_enter, t_exit) -> bool (false stops). Returns false if stopped.
+    /// visit(refs, t_enter, t_exit) -> bool (false stops); empty voxels are skipped. Returns false
+    /// if stopped. Amanatides-Woo 3D-DDA (as traversal/dda.hpp) specialized to this bounded grid:
+    /// 32-bit cells, a linear cell index stepped by the axis stride, reciprocal directions, and
+    /// each crossing recomputed from the integer cell (no accumulated drift). Consecutive voxels
+    /// share their boundary parameter exactly (t_exit of one is t_enter of the next).
     template <class Visit>
     bool walk_voxels(const Vec3<float>& o, const Vec3<float>& d, float t_min, float t_max, Visit&& visit) const noexcept {
         float t0 = t_min, t1 = t_max;
         if (!clip_to_box(o, d, lo_, hi_, t0, t1)) return true;
         const Vec3<float> local = o - lo_;
-        for (GridDda<float> dda(Vec3i64(0), local, d, Vec3<float>(h_[0], h_[1], h_[2]), t0, t1); !dda.done(); dda.step()) {
-            const auto& rc = dda.relative_cell();
-            if (rc[0] < 0 || rc[1] < 0 || rc[2] < 0 || rc[0] >= res_[0] || rc[1] >= res_[1] || rc[2] >= res_[2]) continue;
-            const std::uint32_t c = cell_index(int(rc[0]), int(rc[1]), int(rc[2]));
-            if (start_[c] == start_[c + 1]) continue;
-            if (!visit(cell(c), dda.t_enter(), dda.t_exit())) return false;
+        int ix[3], step[3];
+        float inv[3], next[3];
+        std::int64_t stride[3] = {1, std::int64_t(res_[0]), std::int64_t(res_[0]) * std::int64_t(res_[1])};
+        for (int a = 0; a < 3; ++a) {
+            const float p = local[a] + t0 * d[a];
+            ix[a] = std::clamp(int(std::floor(p / h_[a])), 0, res_[a] - 1);
+            step[a] = d[a] > 0 ? 1 : (d[a] < 0 ? -1 : 0);
+            inv[a] = step[a] != 0 ? 1.0f / d[a] : 0.0f;
         }
-        return true;
+        auto crossing = [&](int a) {
+            return step[a] == 0 ? std::numeric_limits<float>::infinity()
+                                : (float(ix[a] + (step[a] > 0 ? 1 : 0)) * h_[a] - local[a]) * inv[a];
+        };
+        for (int a = 0; a < 3; ++a) next[a] = crossing(a);
+        std::int64_t idx = std::int64_t(cell_index(ix[0], ix[1], ix[2]));
+        float t = t0;
+        for (;;) {
+            const int axis = (next[0] <= next[1]) ? (next[0] <= next[2] ? 0 : 2) : (next[1] <= next[2] ? 1 : 2);
+            const float tx = next[axis] < t1 ? next[axis] : t1;
+            const std::uint32_t b0 = start_[std::size_t(idx)], b1 = start_[std::size_t(idx) + 1];
+            if (b0 != b1 && tx >= t) {
+                if (!visit(std::span<const std::uint32_t>(refs_.data() + b0, refs_.data() + b1), t, tx)) return false;
+            }
+            if (!(next[axis] < t1)) return true;
+            ix[axis] += step[axis];
+            if (ix[axis] < 0 || ix[axis] >= res_[axis]) return true;
+            idx += step[axis] * stride[axis];
+            t = std::max(t, next[axis]);
+            next[axis] = crossing(axis);
+        }
     }
 
     /// Every particle of the query cylinder around o + t d (unit d), t in (t_min, t_max]: centre
