@@ -2,6 +2,7 @@
 /// Umbrella header for the core layer (cheap: GLM and the standard library only).
 #pragma once
 
+#include "grainlight/core/color.hpp"
 #include "grainlight/core/config.hpp"
 #include "grainlight/core/distribution.hpp"
 #include "grainlight/core/error.hpp"

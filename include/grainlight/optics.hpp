@@ -6,6 +6,7 @@
 
 #include "grainlight/optics/bulk.hpp"
 #include "grainlight/optics/goa.hpp"
+#include "grainlight/optics/ice_index.hpp"
 #include "grainlight/optics/lorenz_mie.hpp"
 #include "grainlight/optics/particle.hpp"
 #include "grainlight/optics/psd.hpp"
