@@ -10,9 +10,11 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <string>
 
 #include "common/cli.hpp"
+#include "common/harness.hpp"
 #include "grainlight/integrators/render.hpp"
 
 namespace gl_examples {
@@ -31,6 +33,34 @@ inline grainlight::CheckpointOptions checkpoint_from_cli(const Cli& cli, const s
     c.key = cli.fingerprint({"out", "threads", "checkpoint", "resume"});
     if (const char* n = std::getenv("GRAINLIGHT_ABORT_AFTER_CHECKPOINTS")) c.abort_after_writes = std::atoi(n);
     return c;
+}
+
+/// The checkpoint of one render of a harness example: DIR/<example>.<stem>[.rankRofK].checkpoint
+/// in --out (disabled without --checkpoint / --resume). The file is kept when the render finishes
+/// (so a resumed multi-render run skips the renders already done) and removed by ex.finish().
+inline grainlight::CheckpointOptions checkpoint_for(const Example& ex, const std::string& stem) {
+    const std::string rank_tag =
+        ex.ranks() > 1 ? ".rank" + std::to_string(ex.rank()) + "of" + std::to_string(ex.ranks()) : "";
+    auto c = checkpoint_from_cli(ex.cli(), ex.out() / (ex.name() + "." + stem + rank_tag + ".checkpoint"));
+    if (!c.path.empty()) {
+        c.key ^= std::hash<std::string>{}(stem);  // each render of the example has its own key
+        c.remove_when_done = false;
+        ex.track_checkpoint(c.path);
+    }
+    return c;
+}
+
+/// RenderOptions of one render of a harness example: spp, the example's seed and threads, this
+/// rank's row share, and its checkpoint (checkpoint_for).
+inline grainlight::RenderOptions render_options(const Example& ex, int spp, const std::string& stem) {
+    grainlight::RenderOptions o;
+    o.spp = spp;
+    o.seed = ex.seed();
+    o.threads = ex.threads();
+    o.row_offset = ex.rank();
+    o.row_stride = ex.ranks();
+    o.checkpoint = checkpoint_for(ex, stem);
+    return o;
 }
 
 }  // namespace gl_examples

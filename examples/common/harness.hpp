@@ -7,6 +7,15 @@
 //
 // It is the single place where work splitting over processes, checkpoints and NaN counting plug
 // in: examples that use `parallel` get them without per-example code.
+//   - MPI (examples/common/mpi.hpp; compiled in for the examples CMake links with MPI): the
+//     Example owns the MPI session; `rank()`, `ranks()`, `root()`; `mpi()` for the gathers; only
+//     rank 0 draws progress bars and prints the summary (`finish`), and the summary's "ranks" is
+//     the real count.
+//   - Checkpoints: `checkpointable()` declares --checkpoint SECONDS / --resume; after ready(),
+//     examples/common/checkpoint.hpp's `checkpoint_for(ex, "stem")` gives the RenderOptions
+//     checkpoint of one render (per-rank file in --out, key = fingerprint of the arguments that
+//     change the image); finish() removes the checkpoints of a completed run.
+//   - Non-finite samples: renders count them in their films; `nonfinite(j, count)` reports them.
 //
 //   int main(int argc, char** argv) {
 //       return gl_examples::run(argc, argv, "name", "what it reproduces", [&](gl_examples::Example& ex) {
@@ -28,6 +37,7 @@
 #include <vector>
 
 #include "common/cli.hpp"
+#include "common/mpi.hpp"
 #include "common/output.hpp"
 #include "common/progress.hpp"
 #include "grainlight/core/parallel.hpp"
@@ -56,7 +66,7 @@ public:
         : Example(argc, argv, std::move(program), std::move(summary), "out") {}
     /// As above with another default for --out (e.g. "out/<example>").
     Example(int argc, char** argv, std::string program, std::string summary, std::string default_out)
-        : cli_(argc, argv, program, std::move(summary)), program_(std::move(program)),
+        : mpi_(argc, argv), cli_(argc, argv, program, std::move(summary)), program_(std::move(program)),
           default_out_(std::move(default_out)) {
         for (int i = 0; i < argc; ++i) {
             if (i) command_ += ' ';
@@ -66,7 +76,7 @@ public:
     }
     /// As above with --out documented by `out` (e.g. an optional directory or a file).
     Example(int argc, char** argv, std::string program, std::string summary, const OutOption& out)
-        : cli_(argc, argv, program, std::move(summary)), program_(std::move(program)),
+        : mpi_(argc, argv), cli_(argc, argv, program, std::move(summary)), program_(std::move(program)),
           default_out_(out.default_out.empty() ? "out" : out.default_out) {
         for (int i = 0; i < argc; ++i) {
             if (i) command_ += ' ';
@@ -137,7 +147,20 @@ public:
     [[nodiscard]] const std::filesystem::path& out() const { return out_; }
     [[nodiscard]] std::uint64_t seed() const { return seed_; }
     [[nodiscard]] int threads() const { return threads_; }
-    [[nodiscard]] int ranks() const { return 1; }
+    /// Number of MPI ranks (1 without MPI or without mpirun).
+    [[nodiscard]] int ranks() const { return mpi_.size(); }
+    /// This process's rank (0 without MPI).
+    [[nodiscard]] int rank() const { return mpi_.rank(); }
+    /// Rank 0: the process that writes outputs and prints.
+    [[nodiscard]] bool root() const { return mpi_.root(); }
+    /// The MPI session (gathers of films and byte buffers on rank 0).
+    [[nodiscard]] const MpiSession& mpi() const { return mpi_; }
+    /// Declare --checkpoint SECONDS and --resume (call before ready(); see checkpoint.hpp).
+    void checkpointable() { cli_.checkpoint_options(); }
+    /// Remember a checkpoint file of this run (checkpoint.hpp); finish() removes it.
+    void track_checkpoint(const std::filesystem::path& p) const { checkpoints_.push_back(p); }
+    /// Add "nonfinite_samples": the count of NaN / infinite samples the renders dropped.
+    static Json& nonfinite(Json& j, std::uint64_t count) { return j.integer("nonfinite_samples", (long long)count); }
     [[nodiscard]] const std::string& name() const { return program_; }
     [[nodiscard]] const Cli& cli() const { return cli_; }
 
@@ -147,7 +170,7 @@ public:
     template <class Partial, class Work, class Merge>
     Partial parallel(const std::string& label, std::uint64_t count, std::uint64_t block, Work&& work, Merge&& merge,
                      Partial init = Partial{}) const {
-        ProgressBar bar(label, grainlight::block_count(count, block));
+        ProgressBar bar(label, grainlight::block_count(count, block), !root());
         Partial p = grainlight::parallel_blocks<Partial>(
             count, block, threads_,
             [&](std::uint64_t b, std::uint64_t begin, std::uint64_t end) {
@@ -162,7 +185,7 @@ public:
 
     /// A progress bar for work that parallel() does not run (serial stages, library callbacks).
     [[nodiscard]] ProgressBar progress(const std::string& label, std::uint64_t total) const {
-        return ProgressBar(label, total);
+        return ProgressBar(label, total, !root());
     }
 
     /// The JSON summary, pre-filled with what reproduces the run.
@@ -178,9 +201,14 @@ public:
             .integer("ranks", ranks());
         return j;
     }
-    /// Print the summary as the last stdout line; returns the exit status 0.
+    /// Print the summary as the last stdout line (rank 0 only) and remove the checkpoints of this
+    /// completed run; returns the exit status 0.
     int finish(const Json& j) const {
-        std::cout << j.str() << std::endl;
+        for (const auto& p : checkpoints_) {
+            std::error_code ec;
+            std::filesystem::remove(p, ec);
+        }
+        if (root()) std::cout << j.str() << std::endl;
         return 0;
     }
 
@@ -250,8 +278,10 @@ private:
             return T(cli_.num(name, double(def)));
         }
     }
+    MpiSession mpi_;  // first: MPI_Init before anything else, MPI_Finalize last
     Cli cli_;
     std::string program_, command_, default_out_ = "out";
+    mutable std::vector<std::filesystem::path> checkpoints_;
     bool full_ = false;
     std::uint64_t seed_ = 1;
     int threads_ = 1;

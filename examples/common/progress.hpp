@@ -13,8 +13,9 @@ namespace gl_examples {
 
 class ProgressBar {
 public:
-    ProgressBar(std::string label, std::uint64_t total)
-        : label_(std::move(label)), total_(total ? total : 1), start_(clock::now()), tty_(isatty(2)) {}
+    /// A bar of `total` units; a `quiet` bar counts but never draws.
+    ProgressBar(std::string label, std::uint64_t total, bool quiet = false)
+        : label_(std::move(label)), total_(total ? total : 1), start_(clock::now()), tty_(isatty(2)), quiet_(quiet) {}
     ~ProgressBar() { done(); }
 
     /// A quiet bar counts but never draws (e.g. on every MPI rank but the first).

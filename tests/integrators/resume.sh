@@ -9,7 +9,7 @@ dir=$2
 rm -rf "$dir"
 mkdir -p "$dir"
 args=(--quality full --spp 8 --seed 3 --threads 2)
-ck=vpt_sphere_medium.checkpoint
+ck=vpt_sphere_medium.render.checkpoint
 resumed() {  # rows taken from the checkpoint, from the JSON line: must be in (0, 480)
   local n
   n=$(tail -1 "$1/stdout.txt" | sed -n 's/.*"resumed_rows":\([0-9]*\).*/\1/p')
