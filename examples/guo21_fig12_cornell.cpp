@@ -20,11 +20,17 @@
 // bytes_per_particle.
 #include <chrono>
 #include <ctime>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
 #include <iostream>
 #include <memory>
 
+#include "common/checkpoint.hpp"
 #include "common/cli.hpp"
 #include "common/output.hpp"
 #include "common/progress.hpp"
@@ -117,7 +123,8 @@ struct Run {
 
 template <class Render>
 Run render_batches(int batches, const gl::RenderOptions& base, const std::vector<char>& mask, const std::string& label,
-                   int rows, Render&& render) {
+                   int rows, Render&& render,
+                   const std::function<gl::CheckpointOptions(const std::string&)>& checkpoint = {}) {
     Run r;
     gl_examples::ProgressBar bar(label, std::uint64_t(rows) * std::uint64_t(batches));
     std::vector<gl::Image> imgs;
@@ -128,6 +135,7 @@ Run render_batches(int batches, const gl::RenderOptions& base, const std::vector
         gl::RenderOptions o = base;
         o.spp = spp_b;
         o.seed = base.seed * 1000003ull + std::uint64_t(b) * 7919ull + 1;
+        if (checkpoint) o.checkpoint = checkpoint(label + ".b" + std::to_string(b));  // --checkpoint / --resume
         imgs.push_back(render(o, [&](int n) { bar.advance(std::uint64_t(n)); }));
     }
     r.cpu_seconds = double(std::clock() - c0) / CLOCKS_PER_SEC;
@@ -198,7 +206,8 @@ int main(int argc, char** argv) {
             .option("batches", "independent batches per render (variance, time to unit variance)", "8")
             .option("paper-k", "1: also render ours -FD at the paper's k = 0.5 and 1; 0: skip", "1")
             .option("spectral", "1: also render EPT, ours and ours -FD at 8 wavelengths (ice index of Warren & Brandt "
-                                "2008, coloured walls, CIE 1931 -> sRGB; spp / 8 per wavelength) (default 1 full, 0 quick)");
+                                "2008, coloured walls, CIE 1931 -> sRGB; spp / 8 per wavelength) (default 1 full, 0 quick)")
+            .checkpoint_options();
         cli.finish();
         const bool full = cli.full_quality();
         const auto out = cli.out_dir("out/guo21_fig12_cornell");
@@ -246,6 +255,22 @@ int main(int argc, char** argv) {
         opt.threads = threads;
         opt.seed = cli.seed();
         opt.vpt.max_depth = 256;
+        // --checkpoint SECONDS / --resume: one checkpoint per render (kept when it finishes, so a
+        // resumed run skips the renders already done; all removed at the end). A resumed run's
+        // timings count only the rows it rendered itself.
+        std::vector<std::filesystem::path> checkpoints;
+        const std::function<gl::CheckpointOptions(const std::string&)> checkpoint = [&](const std::string& label) {
+            std::string stem = label;  // a file-name-safe stem of the render's label
+            for (char& ch : stem)
+                if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '.') ch = '_';
+            auto c = gl_examples::checkpoint_from_cli(cli, out / ("guo21_fig12_cornell." + stem + ".checkpoint"));
+            if (!c.path.empty()) {
+                c.key ^= std::hash<std::string>{}(stem);
+                c.remove_when_done = false;
+                checkpoints.push_back(c.path);
+            }
+            return c;
+        };
 
         std::printf("Guo21 Fig. 12 (Sec. 6.1): %llu ice spheres r = %.0f um in a 1 m Cornell box, %dx%d, %d spp\n",
                     (unsigned long long)count, kRadiusUm, width, width, spp);
@@ -257,9 +282,10 @@ int main(int argc, char** argv) {
             using M = gl::ExplicitSphereMedium<float>;
             gl::Scene<M> sc;
             build_cornell(sc, sc.add_medium(M(grid, 1.31f)), 1.5 * r_p);
-            ept = render_batches(batches, opt, mask, "EPT", width, [&](const gl::RenderOptions& o, auto&& prog) {
-                return gl::render_discrete_vpt(sc, camera, o, prog).image();
-            });
+            ept = render_batches(
+                batches, opt, mask, "EPT", width,
+                [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_discrete_vpt(sc, camera, o, prog).image(); },
+                checkpoint);
         }
         // Ours with and without diffraction at r_c.
         double memory_mb = 0, bytes_pp = 0;
@@ -277,9 +303,10 @@ int main(int argc, char** argv) {
                 memory_mb = double(sc.medium(0).memory_bytes()) / (1024.0 * 1024.0);
                 bytes_pp = double(sc.medium(0).memory_bytes()) / double(count);
             }
-            return render_batches(batches, opt, mask, label, width, [&](const gl::RenderOptions& o, auto&& prog) {
-                return gl::render_discrete_vpt(sc, camera, o, prog).image();
-            });
+            return render_batches(
+                batches, opt, mask, label, width,
+                [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_discrete_vpt(sc, camera, o, prog).image(); },
+                checkpoint);
         };
         const double r_c = rc_over_rp * r_p;
         const Run ours = render_ours(r_c, true, "ours", true);
@@ -311,6 +338,7 @@ int main(int argc, char** argv) {
                 gl::RenderOptions o = opt;
                 o.spp = spp_lambda;
                 o.seed = opt.seed * 1000003ull + 104729ull * (i + 1);
+                o.checkpoint = checkpoint(label + ".lambda" + std::to_string(i));
                 auto prog = [&](int n) { bar.advance(std::uint64_t(n)); };
                 if (kind == 0) {
                     using M = gl::ExplicitSphereMedium<float>;
@@ -462,6 +490,10 @@ int main(int argc, char** argv) {
                 .num("rel_diff_discrete_spectral", sp_ours.mean_luminance / sp_ept.mean_luminance - 1)
                 .num("seconds_ept_spectral", sp_ept.seconds)
                 .num("seconds_discrete_spectral", sp_ours.seconds);
+        for (const auto& p : checkpoints) {  // the run is complete: its checkpoints are not needed
+            std::error_code ec;
+            std::filesystem::remove(p, ec);
+        }
         std::cout << j.str() << std::endl;
         return 0;
     });

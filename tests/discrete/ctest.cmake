@@ -57,3 +57,13 @@ if(TARGET guo21_fig12_cornell)
                    -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
   set_tests_properties(guo21_fig12_cornell_spectral_json PROPERTIES LABELS "example;discrete")
 endif()
+
+# Resumable renders (hardening issue): killed once its checkpoints exist, resumed byte-identical.
+if(TARGET guo21_fig12_cornell OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/guo21_fig12_cornell.cpp))
+  add_test(NAME guo21_fig12_cornell_kill_resume
+           COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/common/kill_resume.sh $<TARGET_FILE:guo21_fig12_cornell>
+                   ${CMAKE_CURRENT_BINARY_DIR}/kill_resume_guo21 "ept.exr ours.exr ours_no_diffraction.exr fd_only.exr"
+                   --paper-k 0 --seed 2)
+  set_tests_properties(guo21_fig12_cornell_kill_resume PROPERTIES LABELS "example;discrete;checkpoint" TIMEOUT 300
+    PASS_REGULAR_EXPRESSION "byte-identical")
+endif()
