@@ -172,6 +172,20 @@ struct ShellTracerOptions {
     double switch_depth = -1;   ///< distance to the surface required to switch (< 0: r_0 of the table)
     bool nee = true;            ///< Fig. 6's two shadow rays (false: count escapes that hit lights)
     int max_steps = 100000;     ///< shell steps per path at most
+    /// < 0: Moon07's approximate exit rule at the surface (trace()). >= r_0: hand-back mode
+    /// (trace_to_boundary()): a shell step that lands closer than this to the surface returns the
+    /// path to the caller, which continues it exactly (explicit geometry or exact medium steps).
+    double hand_back_depth = -1;
+};
+
+/// Where the shell-traced part of a path ended (ShellTracer::trace_to_boundary).
+template <class S>
+struct ShellHandBack {
+    S L{0.0};                  ///< radiance gathered by shadow rays before the hand-back (per unit throughput)
+    bool handed_back = false;  ///< true: continue the path exactly from (x, omega) with throughput beta
+    Vec3d x{0.0};              ///< position of the hand-back (inside, closer than hand_back_depth to the surface)
+    Vec3d omega{0.0, 0.0, 1.0};  ///< direction there (unit)
+    double beta = 1.0;         ///< throughput factor accumulated in the shells
 };
 
 /// What a shell-traced path did (for statistics).
@@ -209,6 +223,48 @@ public:
         check_argument(!std::isnan(opt.switch_depth), "ShellTracer", "switch_depth", opt.switch_depth,
                        "a number (< 0: r_0 of the table)");
         switch_depth_ = opt.switch_depth < 0 ? shells_.table().radii.front() : opt.switch_depth;
+        const double r0 = shells_.table().radii.front();
+        check_argument(std::isnan(opt.hand_back_depth) ? false : (opt.hand_back_depth < 0 || opt.hand_back_depth >= r0),
+                       "ShellTracer", "hand_back_depth", opt.hand_back_depth,
+                       "< 0 (Moon07 exit rule) or >= r_0 = " + std::to_string(r0));
+    }
+
+    /// Hand-back mode (hand_back_depth h = max(options().hand_back_depth, r_0)): Fig. 5 shell steps from x (inside, at
+    /// least h from the surface) along unit omega until a step lands closer than h to the surface; then the state is returned for exact continuation. Every
+    /// shell used fits inside the volume (r_i <= distance), so no exit rule and no shadow ray is
+    /// needed: the caller's exact tracing does the boundary layer (and its next-event estimation).
+    /// For a continuous medium this is exact up to the table's discretization (memoryless free
+    /// flights); Moon07's exit rule (trace()) is not (tests/shells/test_shell_tracer.cpp).
+    /// Returns handed_back = false if the path was absorbed (analog) or ran out of steps.
+    [[nodiscard]] ShellHandBack<S> trace_to_boundary(Vec3d x, Vec3d omega, Rng& rng,
+                                                     ShellTraceStats* stats = nullptr) const noexcept {
+        ShellHandBack<S> hb;
+        if (stats) ++stats->paths;
+        const double h = std::max(opt_.hand_back_depth, shells_.table().radii.front());
+        const auto inside = [this](const Vec3d& p) { return !(volume_(p) < 0.0); };
+        for (int k = 0; k < opt_.max_steps; ++k) {
+            if (volume_(x) < h) {
+                hb.handed_back = true;
+                hb.x = x;
+                hb.omega = omega;
+                return hb;
+            }
+            const double t_b = volume_.exit_distance(x, omega);
+            const ShellStep<double> st = shells_.step(x, omega, t_b, rng, inside);
+            if (stats) ++stats->steps;
+            if (st.kind == ShellStepKind::straight) {
+                x = st.p;
+                continue;
+            }
+            if (st.kind != ShellStepKind::scattered) break;  // absorbed (a fitting shell never leaves)
+            if (stats) ++stats->scattered;
+            hb.beta *= st.weight;
+            if (!(hb.beta > 0)) break;
+            x = st.p;
+            omega = st.w;
+        }
+        hb.beta = 0;
+        return hb;
     }
 
     [[nodiscard]] const Shells& shells() const noexcept { return shells_; }
