@@ -77,6 +77,7 @@ struct CubeScene {
         return n;
     }
     double clock_mean = 2.0;  ///< mean path length between switch candidates (R)
+    bool hand_back = false;   ///< high order: shells only where they fit, explicit tracing near the faces
 
     // --- the scene outside the medium (also the Env of the shell tracer) ---
     /// Radiance along a ray outside the cube: the light's front side, else black (blocker,
@@ -142,6 +143,8 @@ struct CubeScene {
         Vec3d c(0.0);
         int events = 0;
         double clock = -1;  // path length to the next switch candidate (< 0: draw)
+        bool handed = false;  // high order, hand-back mode: the path came back from the shells
+        double beta = 1;      // throughput factor from the shells (hand-back mode)
         const double R = tile.radius();
         for (int guard = 0; guard < max_events; ++guard) {
             if (!in_cube) {
@@ -151,7 +154,7 @@ struct CubeScene {
                 const double Le = outside(ray, tc, enters);
                 if (!enters) {
                     if (events_out) *events_out += std::uint64_t(events);
-                    return mode == Mode::high ? 0.0 : Le;
+                    return mode == Mode::high && !handed ? 0.0 : beta * Le;
                 }
                 p += tc * d;
                 in_cube = true;
@@ -223,6 +226,7 @@ struct CubeScene {
             // so a switch point is a typical point of the path, like the table's start frames
             // (SpherePackingShellSource: a random point along each path); the first candidate at
             // least the switch depth inside the volume switches.
+            bool restart = false;  // handed back from the shells: continue from the new state
             if (mode != Mode::pt && tracer && events >= tracer->options().min_scatter) {
                 double along = 0;
                 for (;;) {
@@ -235,12 +239,38 @@ struct CubeScene {
                     clock = -1;
                     const Vec3d x = p + along * d;
                     if (tracer->may_switch(x, events)) {
-                        if (events_out) *events_out += std::uint64_t(events);
+                        if (events_out && !hand_back) *events_out += std::uint64_t(events);
                         if (mode == Mode::low) return 0.0;
-                        return tracer->trace(x, d, rng, *this, ts)[0];
+                        if (!hand_back) return tracer->trace(x, d, rng, *this, ts)[0];
+                        // Hand-back mode: shells where they fit, then explicit tracing again from
+                        // the hand-back point in the scene's own spheres (glass if it lies in one).
+                        const gl::ShellHandBack<S1> hb = tracer->trace_to_boundary(x, d, rng, ts);
+                        if (!hb.handed_back) return 0.0;
+                        handed = true;
+                        beta *= hb.beta;
+                        p = hb.x;
+                        d = hb.omega;
+                        clock = -1;
+                        has_last = false;
+                        in_glass = false;
+                        if (const auto sc = tile.sphere_containing(p)) {
+                            c = sc->center;
+                            const double b = glm::length(glm::cross(p - c, d));
+                            if (b * eta <= R) {
+                                in_glass = true;  // a chord a ray from outside can follow
+                            } else {  // a trapped chord: pass this sphere (leave at its far side)
+                                const Vec3d rel = p - c;
+                                const double bb = glm::dot(rel, d), cc = glm::dot(rel, rel) - R * R;
+                                p += std::max(0.0, -bb + std::sqrt(std::max(0.0, bb * bb - cc))) * d;
+                                has_last = true;
+                            }
+                        }
+                        restart = true;
+                        break;
                     }
                 }
             }
+            if (restart) continue;
             if (leaves) {  // leaves the cube (air to air, index matched)
                 p += t_out * d;
                 in_cube = false;

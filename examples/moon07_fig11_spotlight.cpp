@@ -43,6 +43,8 @@ int main(int argc, char** argv) {
             .option("rebuild-table", "ignore a cached shell table in --out")
             .option("cut-spheres", "a cube cut out of the periodic packing (flat glass faces; no sphere-free skin)")
             .option("no-nee", "high order without Fig. 6's shadow rays (count escapes that hit the light)")
+            .option("exit-rule", "exits outside the cube: radial (Moon07: along y - x) or table (along the sampled T_r direction)", "radial")
+            .option("hand-back", "high order: shells only where they fit, explicit tracing within r_0 of the faces (no exit rule, no shadow rays)")
             .common_options("out/moon07_fig11_spotlight");
         cli.finish();
         const bool full = cli.full_quality();
@@ -145,6 +147,14 @@ int main(int argc, char** argv) {
         to.min_scatter = min_scatter;
         to.switch_depth = switch_depth;
         to.nee = !cli.has("no-nee");
+        const std::string exit_rule = cli.str("exit-rule", "radial");
+        if (exit_rule != "radial" && exit_rule != "table")
+            throw gl_examples::cli_error("--exit-rule = " + exit_rule + " must be radial or table");
+        to.exit_rule = exit_rule == "table" ? gl::ShellExitRule::table : gl::ShellExitRule::radial;
+        if (cli.has("hand-back")) {
+            to.hand_back_depth = shell_r0 * R;
+            scene.hand_back = true;
+        }
         const gl::ShellTracer<S1, gl::BoxDistance> tracer(table, scene.cube, to);
 
         // --- camera; pixels that see the cube ---

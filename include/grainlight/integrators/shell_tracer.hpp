@@ -166,6 +166,12 @@ private:
     SceneType scene_;
 };
 
+/// Direction of a path that leaves the volume through a sampled shell exit point outside it.
+enum class ShellExitRule : std::uint8_t {
+    radial,  ///< Moon07 (Fig. 5): along y - x, the ray from the shell centre to the exit point
+    table    ///< along the exit direction omega' sampled from T_r at y (leaving from y)
+};
+
 /// Options of the Fig. 6 shell tracer.
 struct ShellTracerOptions {
     int min_scatter = 2;        ///< explicit events before a path may switch to shells (switch rule)
@@ -176,6 +182,8 @@ struct ShellTracerOptions {
     /// (trace_to_boundary()): a shell step that lands closer than this to the surface returns the
     /// path to the caller, which continues it exactly (explicit geometry or exact medium steps).
     double hand_back_depth = -1;
+    /// Exit rule of trace() for sampled exit points outside the volume (Moon07's: radial).
+    ShellExitRule exit_rule = ShellExitRule::radial;
 };
 
 /// Where the shell-traced part of a path ended (ShellTracer::trace_to_boundary).
@@ -289,11 +297,35 @@ public:
         const auto inside = [this](const Vec3d& p) { return !(volume_(p) < 0.0); };
         for (int k = 0; k < opt_.max_steps; ++k) {
             const double t_b = volume_.exit_distance(x, omega);
-            if (opt_.nee) {  // first shadow ray: leave through a sampled exit point outside
+            if (opt_.nee && opt_.exit_rule == ShellExitRule::radial) {
+                // first shadow ray: leave through a sampled exit point outside, along y - x
                 const LightSample<double, S> ls = env.sample_light(x, Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()));
                 if (ls) {
                     const double dens = shells_.exit_escape_density(x, omega, t_b, ls.w);
                     if (dens > 0 && env.visible(x, ls.w, ls.dist)) L += ls.L * (beta * dens / ls.pdf);
+                }
+            } else if (opt_.nee) {
+                // first shadow ray, table rule: one exit point y from p_r(y); if it lies outside,
+                // the density of leaving from y toward the light is p_r(w_l | y) cos (times the
+                // probability of a scattered exit and its expected throughput)
+                const int i = shells_.select_shell(volume_(x));
+                const double r = shells_.table().radii[std::size_t(i)];
+                if (volume_(x) < r) {
+                    Vec3d y, w_s;
+                    double pdf_s = 0;
+                    shells_.sample_exit(i, x, omega, rng, y, w_s, pdf_s);
+                    const LightSample<double, S> ls = env.sample_light(y, Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()));
+                    if (ls && volume_(y) < 0.0) {
+                        const Vec3d n = glm::normalize(y - x);
+                        const double c = glm::dot(ls.w, n);
+                        const double pu = t_b < r ? shells_.attenuation(t_b) : shells_.table().p_unscattered[std::size_t(i)];
+                        const double ps = shells_.table().p_scattered[std::size_t(i)], pa = shells_.table().p_absorbed[std::size_t(i)];
+                        if (c > 0 && ps > 0) {
+                            const double dens = (1 - pu) * ps / (ps + pa) *
+                                                shells_.exit_direction_density(i, shell_coords(x, omega, y, ls.w)) * c;
+                            if (dens > 0 && env.visible(y, ls.w, ls.dist)) L += ls.L * (beta * dens / ls.pdf);
+                        }
+                    }
                 }
             }
             const ShellStep<double> st = shells_.step(x, omega, t_b, rng, inside);
@@ -310,7 +342,8 @@ public:
                     return L;
                 case ShellStepKind::exited:
                     if (stats) ++stats->exits;
-                    if (!opt_.nee) L += env.escape(Ray<double>(st.p, st.w)) * beta;
+                    if (!opt_.nee)
+                        L += env.escape(Ray<double>(st.p, opt_.exit_rule == ShellExitRule::table ? st.w_table : st.w)) * beta;
                     return L;
                 case ShellStepKind::scattered: {
                     if (stats) ++stats->scattered;
