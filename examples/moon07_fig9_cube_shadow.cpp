@@ -12,7 +12,8 @@
 //
 // Scene (units: the sphere radius R = 1): N equal glass spheres (eta = 1.5, no absorption) at
 // packing fraction f by random sequential addition (packing/poisson.hpp; paper: 120 000
-// "Poisson distributed" spheres) in a cube of side L = (N 4/3 pi / f)^(1/3) standing on a black
+// "Poisson distributed" spheres; cut by the cube's faces, --whole-spheres: only those with
+// centres >= R inside) in a cube of side L = (N 4/3 pi / f)^(1/3) standing on a black
 // floor; a square light of side 0.12 L (--light-size) at height 2.2 L facing down; a black blocker at 1.5 L
 // covering x < 0.42 L. The shell table is precomputed from the same random process (the
 // periodic RSA tile of the cube, SpherePackingShellSource) and cached in DIR.
