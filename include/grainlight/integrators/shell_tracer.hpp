@@ -219,6 +219,9 @@ struct ShellTraceStats {
 /// direction is counted through `escape`. Without `nee` every escape is followed by `escape`
 /// (exits leave along y - x, the paper's exit rule): the analog estimator the shadow rays
 /// replace. Both estimate the same expectation (tests/shells/test_shell_tracer.cpp).
+/// `exit_rule = ShellExitRule::table` makes exits outside leave from y along the sampled T_r
+/// direction instead of y - x (the first shadow ray then samples one exit point y and adds
+/// L p_r(w_l | y) cos if y is outside); `trace_to_boundary` (hand-back mode) needs no exit rule.
 template <class S, class Volume>
 class ShellTracer {
 public:
