@@ -12,7 +12,8 @@
 //
 // Scene (units: the sphere radius R = 1): N equal glass spheres (eta = 1.5, no absorption) at
 // packing fraction f by random sequential addition (packing/poisson.hpp; paper: 120 000
-// "Poisson distributed" spheres) in a cube of side L = (N 4/3 pi / f)^(1/3) standing on a black
+// "Poisson distributed" spheres; cut by the cube's faces, --whole-spheres: only those with
+// centres >= R inside) in a cube of side L = (N 4/3 pi / f)^(1/3) standing on a black
 // floor; a square light of side 0.12 L (--light-size) at height 2.2 L facing down; a black blocker at 1.5 L
 // covering x < 0.42 L. The shell table is precomputed from the same random process (the
 // periodic RSA tile of the cube, SpherePackingShellSource) and cached in DIR.
@@ -27,317 +28,7 @@
 // JSON (last stdout line): seconds_pt, seconds_low, seconds_high, rmse_pt, rmse_shells,
 // speedup_equal_error, mean_pt, mean_shells, bias_rel (+ _se: the exit-rule/shell bias of the
 // mean against PT), table figures; paper: 236 min PT vs 12 + 2.25 min, 16x.
-#include <time.h>
-
-#include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <cstdint>
-#include <filesystem>
-#include <iostream>
-#include <limits>
-#include <stdexcept>
-#include <string>
-#include <vector>
-
-#include "common/cli.hpp"
-#include "common/output.hpp"
-#include "common/progress.hpp"
-#include "grainlight/core/rng.hpp"
-#include "grainlight/core/statistics.hpp"
-#include "grainlight/geometry/aabb.hpp"
-#include "grainlight/geometry/distance.hpp"
-#include "grainlight/integrators/render.hpp"
-#include "grainlight/integrators/shell_tracer.hpp"
-#include "grainlight/integrators/walk.hpp"
-#include "grainlight/packing/periodic_tile.hpp"
-#include "grainlight/packing/poisson.hpp"
-#include "grainlight/precompute/shell_builder.hpp"
-#include "grainlight/scene/camera.hpp"
-#include "grainlight/scene/film.hpp"
-#include "grainlight/scene/image_io.hpp"
-#include "grainlight/scene/lights.hpp"
-
-#if defined(_OPENMP)
-#include <omp.h>
-#endif
-
-namespace gl = grainlight;
-using gl::Vec3d;
-using S1 = gl::Spectrum<1, double>;
-
-namespace {
-
-double cpu_seconds() {
-    timespec ts{};
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-}
-
-enum class Mode { pt, low, high };
-
-/// The Fig. 9 scene: explicit spheres in the cube, light, blocker, black floor.
-struct CubeScene {
-    double L = 1, eta = 1.5;
-    gl::PeriodicTile tile;  ///< the cube's spheres in a padded tile (images never reach the cube)
-    gl::BoxDistance cube;
-    gl::Light<double, S1> light;
-    gl::QuadShape<double> blocker;
-    int max_events = 100000;
-    bool cut = false;  ///< spheres cut by the cube faces (flat glass faces there) instead of whole ones
-
-    /// Outward normal of the cube face nearest to p.
-    [[nodiscard]] Vec3d face_normal(const Vec3d& p) const noexcept {
-        int best = 0;
-        double dmin = std::numeric_limits<double>::infinity(), sgn = 1;
-        for (int a = 0; a < 3; ++a) {
-            if (p[a] - cube.lo[a] < dmin) { dmin = p[a] - cube.lo[a]; best = a; sgn = -1; }
-            if (cube.hi[a] - p[a] < dmin) { dmin = cube.hi[a] - p[a]; best = a; sgn = 1; }
-        }
-        Vec3d n(0.0);
-        n[best] = sgn;
-        return n;
-    }
-    double clock_mean = 2.0;  ///< mean path length between switch candidates (R)
-
-    // --- the scene outside the medium (also the Env of the shell tracer) ---
-    /// Radiance along a ray outside the cube: the light's front side, else black (blocker,
-    /// floor z = 0, background). `t_cube`: the distance to the cube (inf: ignore it).
-    [[nodiscard]] double outside(const gl::Ray<double>& r, double t_cube, bool& enters) const noexcept {
-        enters = false;
-        if (r.o.z < 0) return 0.0;  // below the floor: absorbed
-        double t_best = t_cube;
-        int what = 0;  // 0 none/cube, 1 light, 2 blocker/floor
-        double t;
-        Vec3d n;
-        if (light.quad.intersect(r, t, n) && t < t_best && glm::dot(r.d, n) < 0) {
-            t_best = t;
-            what = 1;
-        }
-        if (blocker.intersect(r, t, n) && t < t_best) {
-            t_best = t;
-            what = 2;
-        }
-        if (r.d.z < 0 && r.o.z > 0) {
-            const double tf = -r.o.z / r.d.z;
-            if (tf < t_best) {
-                t_best = tf;
-                what = 2;
-            }
-        }
-        if (what == 1) return light.power[0];
-        if (what == 0 && std::isfinite(t_cube)) enters = true;
-        return 0.0;
-    }
-    [[nodiscard]] gl::LightSample<double, S1> sample_light(const Vec3d& p, const Vec3d& u) const noexcept {
-        return light.sample(p, gl::Vec2d(u.x, u.y));
-    }
-    [[nodiscard]] bool visible(const Vec3d& p, const Vec3d& w, double dist) const noexcept {
-        double t;
-        Vec3d n;
-        return !blocker.intersect(gl::Ray<double>(p, w, dist * (1 - 1e-9)), t, n);
-    }
-    [[nodiscard]] S1 escape(const gl::Ray<double>& r) const noexcept {
-        bool enters;
-        return S1(outside(r, std::numeric_limits<double>::infinity(), enters));
-    }
-
-    /// Entry distance of the ray into the cube (inf if it misses).
-    [[nodiscard]] double cube_entry(const gl::Ray<double>& r) const noexcept {
-        const gl::Aabb<double> b(cube.lo, cube.hi);
-        const Vec3d inv(1 / r.d.x, 1 / r.d.y, 1 / r.d.z);
-        double te = 0;
-        if (!gl::intersect_aabb(b, r.o, inv, 1e-9, std::numeric_limits<double>::infinity(), &te))
-            return std::numeric_limits<double>::infinity();
-        return te;
-    }
-
-    /// One camera path. PT: explicit to the end. Low: explicit, stopped (0) when the switch rule
-    /// fires. High: 0 unless the switch rule fires, then the shell tracer's radiance.
-    template <class Tracer>
-    [[nodiscard]] double radiance(gl::Ray<double> r, gl::Rng& rng, Mode mode, const Tracer* tracer,
-                                  std::uint64_t* events_out = nullptr, gl::ShellTraceStats* ts = nullptr) const noexcept {
-        Vec3d p = r.o, d = r.d;
-        bool in_cube = false, in_glass = false, has_last = false;
-        Vec3d c(0.0);
-        int events = 0;
-        double clock = -1;  // path length to the next switch candidate (< 0: draw)
-        const double R = tile.radius();
-        for (int guard = 0; guard < max_events; ++guard) {
-            if (!in_cube) {
-                const gl::Ray<double> ray(p, d);
-                const double tc = cube_entry(ray);
-                bool enters = false;
-                const double Le = outside(ray, tc, enters);
-                if (!enters) {
-                    if (events_out) *events_out += std::uint64_t(events);
-                    return mode == Mode::high ? 0.0 : Le;
-                }
-                p += tc * d;
-                in_cube = true;
-                has_last = false;
-                if (cut) {  // entering through a cut sphere: flat glass face
-                    const gl::TileHit h = tile.first_hit(gl::Vec3i64{0, 0, 0}, p, d, 0.0, 1e-9);
-                    if (h && h.t_enter < 0) {
-                        const Vec3d n = face_normal(p);
-                        bool refracted = false;
-                        double eta_rel = 1;
-                        d = gl::sample_dielectric(d, n, eta, rng.uniform<double>(), refracted, eta_rel);
-                        ++events;
-                        if (!refracted) {
-                            in_cube = false;
-                            p += 1e-9 * n;
-                            continue;
-                        }
-                        in_glass = true;
-                        c = tile.center(h.sphere) + Vec3d(double(h.tile.x), double(h.tile.y), double(h.tile.z)) * tile.side();
-                    }
-                }
-                continue;
-            }
-            double t;
-            bool leaves = false;
-            const double t_out = cube.exit_distance(p, d);
-            if (in_glass) {
-                const Vec3d rel = p - c;
-                const double b = glm::dot(rel, d), cc = glm::dot(rel, rel) - R * R;
-                t = std::max(0.0, -b + std::sqrt(std::max(0.0, b * b - cc)));
-                if (cut && t_out < t) {  // the flat face of a cut sphere comes first
-                    p += t_out * d;
-                    const Vec3d n = face_normal(p);
-                    bool refracted = false;
-                    double eta_rel = 1;
-                    d = gl::sample_dielectric(d, n, eta, rng.uniform<double>(), refracted, eta_rel);
-                    ++events;
-                    if (refracted) {
-                        in_glass = false;
-                        in_cube = false;
-                        p += 1e-9 * n;
-                    } else {
-                        p -= 1e-9 * n;
-                    }
-                    continue;
-                }
-            } else {
-                t = std::numeric_limits<double>::infinity();
-                double t_min = 0;
-                for (int k = 0; k < 4; ++k) {
-                    const gl::TileHit h = tile.first_hit(gl::Vec3i64{0, 0, 0}, p, d, t_min, t_out);
-                    if (!h) break;
-                    const Vec3d cen = tile.center(h.sphere) + Vec3d(double(h.tile.x), double(h.tile.y), double(h.tile.z)) * tile.side();
-                    if (has_last && glm::length(cen - c) < 1e-9 * R && h.t_enter < 1e-7 * R) {
-                        t_min = h.t_exit;
-                        continue;
-                    }
-                    c = cen;
-                    t = std::max(0.0, h.t_enter);
-                    break;
-                }
-                if (!std::isfinite(t)) {
-                    t = t_out;
-                    leaves = true;
-                }
-            }
-            // Switch rule (Moon07 Sec. 4.2): once min_scatter events happened, candidate switch
-            // points arrive along the path length as a Poisson clock (mean spacing clock_mean),
-            // so a switch point is a typical point of the path, like the table's start frames
-            // (SpherePackingShellSource: a random point along each path); the first candidate at
-            // least the switch depth inside the volume switches.
-            if (mode != Mode::pt && tracer && events >= tracer->options().min_scatter) {
-                double along = 0;
-                for (;;) {
-                    if (!(clock >= 0)) clock = gl::sample_exponential(rng.uniform<double>(), 1.0 / clock_mean);
-                    if (along + clock >= t) {
-                        clock -= t - along;
-                        break;
-                    }
-                    along += clock;
-                    clock = -1;
-                    const Vec3d x = p + along * d;
-                    if (tracer->may_switch(x, events)) {
-                        if (events_out) *events_out += std::uint64_t(events);
-                        if (mode == Mode::low) return 0.0;
-                        return tracer->trace(x, d, rng, *this, ts)[0];
-                    }
-                }
-            }
-            if (leaves) {  // leaves the cube (air to air, index matched)
-                p += t_out * d;
-                in_cube = false;
-                continue;
-            }
-            // Interface event at a sphere: Fresnel reflection or refraction.
-            p += t * d;
-            const Vec3d n = glm::normalize(p - c);
-            bool refracted = false;
-            double eta_rel = 1;
-            d = gl::sample_dielectric(d, n, eta, rng.uniform<double>(), refracted, eta_rel);
-            if (refracted) in_glass = !in_glass;
-            has_last = true;
-            ++events;
-        }
-        if (events_out) *events_out += std::uint64_t(events);
-        return 0.0;
-    }
-};
-
-/// Per-pixel batch statistics of B renders.
-struct BatchImages {
-    int W = 0, H = 0, B = 0;
-    std::vector<std::vector<double>> img;  // [batch][pixel]
-    double cpu = 0;
-    [[nodiscard]] double mean(std::size_t i) const {
-        double s = 0;
-        for (const auto& b : img) s += b[i];
-        return s / double(B);
-    }
-    /// Variance of the batch mean at pixel i.
-    [[nodiscard]] double var_mean(std::size_t i) const {
-        const double m = mean(i);
-        double s = 0;
-        for (const auto& b : img) s += (b[i] - m) * (b[i] - m);
-        return s / double(B - 1) / double(B);
-    }
-};
-
-template <class Fn>
-BatchImages render_batches(const gl::PinholeCamera<double>& cam, int spp, int B, std::uint64_t seed, int threads,
-                           const std::string& label, Fn&& fn) {
-    BatchImages out;
-    out.W = cam.width();
-    out.H = cam.height();
-    out.B = B;
-    gl_examples::ProgressBar bar(label, std::uint64_t(B) * std::uint64_t(cam.height()));
-    const double c0 = cpu_seconds();
-    for (int b = 0; b < B; ++b) {
-        gl::RenderOptions ro;
-        ro.spp = spp;
-        ro.seed = seed * 1000003u + std::uint64_t(b);
-        ro.threads = threads;
-        const gl::Film film = gl::render_image(
-            cam, [&](const gl::Ray<double>& r, gl::Rng& rng) { return S1(fn(r, rng)); }, ro,
-            [&](int n) { bar.advance(std::uint64_t(n)); });
-        std::vector<double> v(std::size_t(out.W) * std::size_t(out.H));
-        for (int y = 0; y < out.H; ++y)
-            for (int x = 0; x < out.W; ++x) v[std::size_t(y) * std::size_t(out.W) + std::size_t(x)] = film.value(x, y, 0);
-        out.img.push_back(std::move(v));
-    }
-    bar.done();
-    out.cpu = cpu_seconds() - c0;
-    return out;
-}
-
-void write_image(const std::filesystem::path& dir, const std::string& name, const std::vector<double>& v, int W, int H,
-                 double scale) {
-    gl::Image img(W, H);
-    for (int y = 0; y < H; ++y)
-        for (int x = 0; x < W; ++x)
-            for (int ch = 0; ch < 3; ++ch) img.at(x, y, ch) = float(v[std::size_t(y) * std::size_t(W) + std::size_t(x)]);
-    gl::write_exr(dir / (name + ".exr"), img);
-    gl::write_png(dir / (name + ".png"), img, {std::log2(scale)});
-}
-
-}  // namespace
+#include "moon07_cube_scene.hpp"
 
 int main(int argc, char** argv) {
     return gl_examples::run_main("moon07_fig9_cube_shadow", [&]() -> int {
@@ -357,8 +48,11 @@ int main(int argc, char** argv) {
             .option("shell-radii", "number of shell radii (paper: 12-16)", "8 quick, 12 full")
             .option("shell-r0", "smallest shell radius r_0 (R; the correlation length)", "2")
             .option("rebuild-table", "ignore a cached shell table in --out")
-            .option("cut-spheres", "a cube cut out of the periodic packing (flat glass faces; no sphere-free skin)")
+            .option("cut-spheres", "a cube cut out of the periodic packing (flat glass faces; the default)")
+            .option("whole-spheres", "whole spheres only, centres >= R inside (a sphere-free skin the shells do not describe: +12 % bias at L = 59 R)")
             .option("no-nee", "high order without Fig. 6's shadow rays (count escapes that hit the light)")
+            .option("exit-rule", "exits outside the cube: radial (Moon07: along y - x) or table (along the sampled T_r direction)", "table")
+            .option("hand-back", "high order: shells only where they fit, explicit tracing within r_0 of the faces (no exit rule, no shadow rays)")
             .common_options("out/moon07_fig9_cube_shadow");
         cli.finish();
         const bool full = cli.full_quality();
@@ -409,7 +103,7 @@ int main(int argc, char** argv) {
                                                   Vec3d(0, light_size * L, 0), Vec3d(light_size * L, 0, 0)),
                             S1(0.9 / (light_size * light_size))),
                         gl::QuadShape<double>(Vec3d(-2 * L, -2 * L, 1.5 * L), Vec3d(2.42 * L, 0, 0), Vec3d(0, 5 * L, 0))};
-        if (cli.has("cut-spheres")) {
+        if (!cli.has("whole-spheres")) {  // default: the medium the shell table describes up to the faces
             scene.tile = rsa;
             scene.cut = true;
             kept = rsa.centers();
@@ -457,6 +151,14 @@ int main(int argc, char** argv) {
         to.min_scatter = min_scatter;
         to.switch_depth = switch_depth;
         to.nee = !cli.has("no-nee");
+        const std::string exit_rule = cli.str("exit-rule", "table");
+        if (exit_rule != "radial" && exit_rule != "table")
+            throw gl_examples::cli_error("--exit-rule = " + exit_rule + " must be radial or table");
+        to.exit_rule = exit_rule == "table" ? gl::ShellExitRule::table : gl::ShellExitRule::radial;
+        if (cli.has("hand-back")) {
+            to.hand_back_depth = shell_r0 * R;
+            scene.hand_back = true;
+        }
         const gl::ShellTracer<S1, gl::BoxDistance> tracer(table, scene.cube, to);
 
         // --- camera; pixels that see the cube ---
@@ -591,6 +293,7 @@ int main(int argc, char** argv) {
             .num("mean_low", sum_lo / nm)
             .num("mean_high", sum_hi / nm)
             .num("bias_rel", bias_rel)
+            .num("exit_rule_bias", bias_rel)
             .num("bias_rel_se", bias_rel_se)
             .num("ttuv_ratio", ttuv_ratio)
             .num("rmse_shells_pixelwise", std::sqrt(mse_sh_pixelwise))
@@ -598,6 +301,9 @@ int main(int argc, char** argv) {
             .num("switched_fraction", double(ts.paths) / high_samples)
             .num("shell_steps_per_switched_path", ts.paths ? double(ts.steps) / double(ts.paths) : 0.0)
             .num("exit_fraction", ts.paths ? double(ts.exits) / double(ts.paths) : 0.0)
+            .boolean("cut_spheres", scene.cut)
+            .boolean("exit_rule_table", to.exit_rule == gl::ShellExitRule::table)
+            .boolean("hand_back", scene.hand_back)
             .integer("min_scatter", min_scatter)
             .num("switch_depth", to.switch_depth)
             .integer("spheres", (long long)kept.size())

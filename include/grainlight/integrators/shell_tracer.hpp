@@ -166,12 +166,34 @@ private:
     SceneType scene_;
 };
 
+/// Direction of a path that leaves the volume through a sampled shell exit point outside it.
+enum class ShellExitRule : std::uint8_t {
+    radial,  ///< Moon07 (Fig. 5): along y - x, the ray from the shell centre to the exit point
+    table    ///< along the exit direction omega' sampled from T_r at y (leaving from y)
+};
+
 /// Options of the Fig. 6 shell tracer.
 struct ShellTracerOptions {
     int min_scatter = 2;        ///< explicit events before a path may switch to shells (switch rule)
     double switch_depth = -1;   ///< distance to the surface required to switch (< 0: r_0 of the table)
     bool nee = true;            ///< Fig. 6's two shadow rays (false: count escapes that hit lights)
     int max_steps = 100000;     ///< shell steps per path at most
+    /// < 0: Moon07's approximate exit rule at the surface (trace()). >= r_0: hand-back mode
+    /// (trace_to_boundary()): a shell step that lands closer than this to the surface returns the
+    /// path to the caller, which continues it exactly (explicit geometry or exact medium steps).
+    double hand_back_depth = -1;
+    /// Exit rule of trace() for sampled exit points outside the volume (Moon07's: radial).
+    ShellExitRule exit_rule = ShellExitRule::radial;
+};
+
+/// Where the shell-traced part of a path ended (ShellTracer::trace_to_boundary).
+template <class S>
+struct ShellHandBack {
+    S L{0.0};                  ///< radiance gathered by shadow rays before the hand-back (per unit throughput)
+    bool handed_back = false;  ///< true: continue the path exactly from (x, omega) with throughput beta
+    Vec3d x{0.0};              ///< position of the hand-back (inside, closer than hand_back_depth to the surface)
+    Vec3d omega{0.0, 0.0, 1.0};  ///< direction there (unit)
+    double beta = 1.0;         ///< throughput factor accumulated in the shells
 };
 
 /// What a shell-traced path did (for statistics).
@@ -197,6 +219,9 @@ struct ShellTraceStats {
 /// direction is counted through `escape`. Without `nee` every escape is followed by `escape`
 /// (exits leave along y - x, the paper's exit rule): the analog estimator the shadow rays
 /// replace. Both estimate the same expectation (tests/shells/test_shell_tracer.cpp).
+/// `exit_rule = ShellExitRule::table` makes exits outside leave from y along the sampled T_r
+/// direction instead of y - x (the first shadow ray then samples one exit point y and adds
+/// L p_r(w_l | y) cos if y is outside); `trace_to_boundary` (hand-back mode) needs no exit rule.
 template <class S, class Volume>
 class ShellTracer {
 public:
@@ -209,6 +234,48 @@ public:
         check_argument(!std::isnan(opt.switch_depth), "ShellTracer", "switch_depth", opt.switch_depth,
                        "a number (< 0: r_0 of the table)");
         switch_depth_ = opt.switch_depth < 0 ? shells_.table().radii.front() : opt.switch_depth;
+        const double r0 = shells_.table().radii.front();
+        check_argument(std::isnan(opt.hand_back_depth) ? false : (opt.hand_back_depth < 0 || opt.hand_back_depth >= r0),
+                       "ShellTracer", "hand_back_depth", opt.hand_back_depth,
+                       "< 0 (Moon07 exit rule) or >= r_0 = " + std::to_string(r0));
+    }
+
+    /// Hand-back mode (hand_back_depth h = max(options().hand_back_depth, r_0)): Fig. 5 shell steps from x (inside, at
+    /// least h from the surface) along unit omega until a step lands closer than h to the surface; then the state is returned for exact continuation. Every
+    /// shell used fits inside the volume (r_i <= distance), so no exit rule and no shadow ray is
+    /// needed: the caller's exact tracing does the boundary layer (and its next-event estimation).
+    /// For a continuous medium this is exact up to the table's discretization (memoryless free
+    /// flights); Moon07's exit rule (trace()) is not (tests/shells/test_shell_tracer.cpp).
+    /// Returns handed_back = false if the path was absorbed (analog) or ran out of steps.
+    [[nodiscard]] ShellHandBack<S> trace_to_boundary(Vec3d x, Vec3d omega, Rng& rng,
+                                                     ShellTraceStats* stats = nullptr) const noexcept {
+        ShellHandBack<S> hb;
+        if (stats) ++stats->paths;
+        const double h = std::max(opt_.hand_back_depth, shells_.table().radii.front());
+        const auto inside = [this](const Vec3d& p) { return !(volume_(p) < 0.0); };
+        for (int k = 0; k < opt_.max_steps; ++k) {
+            if (volume_(x) < h) {
+                hb.handed_back = true;
+                hb.x = x;
+                hb.omega = omega;
+                return hb;
+            }
+            const double t_b = volume_.exit_distance(x, omega);
+            const ShellStep<double> st = shells_.step(x, omega, t_b, rng, inside);
+            if (stats) ++stats->steps;
+            if (st.kind == ShellStepKind::straight) {
+                x = st.p;
+                continue;
+            }
+            if (st.kind != ShellStepKind::scattered) break;  // absorbed (a fitting shell never leaves)
+            if (stats) ++stats->scattered;
+            hb.beta *= st.weight;
+            if (!(hb.beta > 0)) break;
+            x = st.p;
+            omega = st.w;
+        }
+        hb.beta = 0;
+        return hb;
     }
 
     [[nodiscard]] const Shells& shells() const noexcept { return shells_; }
@@ -233,11 +300,35 @@ public:
         const auto inside = [this](const Vec3d& p) { return !(volume_(p) < 0.0); };
         for (int k = 0; k < opt_.max_steps; ++k) {
             const double t_b = volume_.exit_distance(x, omega);
-            if (opt_.nee) {  // first shadow ray: leave through a sampled exit point outside
+            if (opt_.nee && opt_.exit_rule == ShellExitRule::radial) {
+                // first shadow ray: leave through a sampled exit point outside, along y - x
                 const LightSample<double, S> ls = env.sample_light(x, Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()));
                 if (ls) {
                     const double dens = shells_.exit_escape_density(x, omega, t_b, ls.w);
                     if (dens > 0 && env.visible(x, ls.w, ls.dist)) L += ls.L * (beta * dens / ls.pdf);
+                }
+            } else if (opt_.nee) {
+                // first shadow ray, table rule: one exit point y from p_r(y); if it lies outside,
+                // the density of leaving from y toward the light is p_r(w_l | y) cos (times the
+                // probability of a scattered exit and its expected throughput)
+                const int i = shells_.select_shell(volume_(x));
+                const double r = shells_.table().radii[std::size_t(i)];
+                if (volume_(x) < r) {
+                    Vec3d y, w_s;
+                    double pdf_s = 0;
+                    shells_.sample_exit(i, x, omega, rng, y, w_s, pdf_s);
+                    const LightSample<double, S> ls = env.sample_light(y, Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()));
+                    if (ls && volume_(y) < 0.0) {
+                        const Vec3d n = glm::normalize(y - x);
+                        const double c = glm::dot(ls.w, n);
+                        const double pu = t_b < r ? shells_.attenuation(t_b) : shells_.table().p_unscattered[std::size_t(i)];
+                        const double ps = shells_.table().p_scattered[std::size_t(i)], pa = shells_.table().p_absorbed[std::size_t(i)];
+                        if (c > 0 && ps > 0) {
+                            const double dens = (1 - pu) * ps / (ps + pa) *
+                                                shells_.exit_direction_density(i, shell_coords(x, omega, y, ls.w)) * c;
+                            if (dens > 0 && env.visible(y, ls.w, ls.dist)) L += ls.L * (beta * dens / ls.pdf);
+                        }
+                    }
                 }
             }
             const ShellStep<double> st = shells_.step(x, omega, t_b, rng, inside);
@@ -254,7 +345,8 @@ public:
                     return L;
                 case ShellStepKind::exited:
                     if (stats) ++stats->exits;
-                    if (!opt_.nee) L += env.escape(Ray<double>(st.p, st.w)) * beta;
+                    if (!opt_.nee)
+                        L += env.escape(Ray<double>(st.p, opt_.exit_rule == ShellExitRule::table ? st.w_table : st.w)) * beta;
                     return L;
                 case ShellStepKind::scattered: {
                     if (stats) ++stats->scattered;

@@ -272,6 +272,7 @@ struct ShellStep {
     F r = F(0);                ///< its radius
     Vec3<F> p{F(0)};           ///< new position
     Vec3<F> w{F(0)};           ///< new direction
+    Vec3<F> w_table{F(0)};     ///< direction sampled from T_r (differs from w for `exited`: w = y - x there)
     F weight = F(1);           ///< throughput factor (1 - P(absorbed | event)) unless analog
     F direction_pdf = F(0);    ///< solid-angle pdf of w given p (scattered steps)
 };
@@ -470,6 +471,7 @@ public:
         }
         if (!analog_) s.weight = F(1) - pa;
         sample_exit(s.shell, x, omega, rng, s.p, s.w, s.direction_pdf);
+        s.w_table = s.w;
         s.kind = ShellStepKind::scattered;
         if (!inside(s.p)) {
             s.kind = ShellStepKind::exited;
