@@ -53,6 +53,7 @@
 #include "grainlight/media/shell.hpp"
 #include "grainlight/packing/periodic_tile.hpp"
 #include "grainlight/scene/concepts.hpp"
+#include "grainlight/scene/unbounded_medium.hpp"
 
 namespace grainlight {
 
@@ -164,17 +165,8 @@ private:
     double fa_len_ = 0;
 };
 
-/// A scene with no surfaces filled with one medium (index 0): an unbounded homogeneous medium for
-/// the walk kernel.
-template <Medium M>
-struct UnboundedMediumScene {
-    using Float = typename M::Float;
-    using Spectrum = typename M::Spectrum;
-    using Medium = M;
-    const M* m = nullptr;
-    [[nodiscard]] SurfaceHit<Float, Spectrum> intersect(const Ray<Float>&) const noexcept { return {}; }
-    [[nodiscard]] const M& medium(int) const noexcept { return *m; }
-};
+// UnboundedMediumScene (a scene with no surfaces filled with one medium) is the library's one
+// unbounded-medium scene, scene/unbounded_medium.hpp.
 
 /// Path source: the walk kernel in an unbounded homogeneous medium (analog grey walk assumed:
 /// the throughput is not used). The path starts at the origin along +z.

@@ -23,6 +23,8 @@ struct UnboundedMediumScene {
     UnboundedMediumScene() = default;
     /// The medium filling space (not copied: keep it alive while the scene is used).
     explicit UnboundedMediumScene(const M& medium) noexcept : m(&medium) {}
+    /// The same from a pointer (the form the shell builder used: `UnboundedMediumScene<M>{&m}`).
+    explicit UnboundedMediumScene(const M* medium) noexcept : m(medium) {}
     /// No surfaces: every ray misses.
     [[nodiscard]] SurfaceHit<Float, Spectrum> intersect(const Ray<Float>&) const noexcept { return {}; }
     /// The medium, whatever the index.
