@@ -24,10 +24,7 @@
 #include <string>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/mpi.hpp"
-#include "common/output.hpp"
-#include "common/progress.hpp"
+#include "common/harness.hpp"
 #include "grainlight/precompute/scatterometer.hpp"
 
 namespace gl = grainlight;
@@ -35,7 +32,7 @@ using namespace gl_examples;
 
 namespace {
 
-gl::RGBd rgb_option(const Cli& cli, const std::string& name, double def) {
+gl::RGBd rgb_option(const Cli& cli, const std::string& name, double def) {  // one value or r,g,b
     const auto v = cli.list(name, {def});
     if (v.size() == 1) return gl::RGBd(v[0]);
     if (v.size() == 3) return gl::RGBd{v[0], v[1], v[2]};
@@ -72,28 +69,29 @@ gl::ScatterometerTally decode_tally(const std::vector<unsigned char>& bytes, con
 }  // namespace
 
 int main(int argc, char** argv) {
-    return run_main("grain_stats", [&] {
-        MpiSession mpi(argc, argv);  // one rank without mpirun (or without MPI)
-        Cli cli(argc, argv, "grain_stats", "virtual scatterometer statistics of one grain (Meng15 Sec. 4.2, Table 1)");
-        cli.common_options("out/grain_stats");
-        cli.option("preset", "glass-bead|snow|salt|sugar|brown-sugar|sand|flour|rice (a Table 1 grain)")
-            .option("shape", "sphere|snow|crystal|rice|flake")
-            .option("material", "dielectric|diffuse|absorbing-dielectric")
-            .option("ior", "relative index of refraction (dielectrics)", "1.5")
-            .option("albedo", "Lambertian albedo (diffuse), A or r,g,b", "0.8")
-            .option("interior-sigma-a", "absorption inside the grain per bounding radius, S or r,g,b", "0")
-            .option("interior-sigma-s", "scattering inside the grain per bounding radius, S or r,g,b", "0")
-            .option("interior-g", "HG asymmetry of the interior scattering", "0")
-            .option("grain-radius", "radius R of the grain's bounding sphere, 0 < R <= 1")
-            .option("grain-seed", "seed of the procedural shape", "1")
-            .option("mesh-level", "icosphere subdivision level of mesh grains (20*4^level triangles)", "5")
-            .option("rays", "incident rays", "200000 (quick) / 2000000 (full)")
-            .option("load", "FILE[,FILE...]: statistics saved earlier (.scat) instead of running the scatterometer")
-            .option("weights", "w1,w2,...: mix the grains of --preset/--load (Meng15 Sec. 4.2.3); w >= 0, positive sum");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const auto out = cli.out_dir("out/grain_stats");
-        const int threads = cli.threads();
+    return run(argc, argv, "grain_stats", "virtual scatterometer statistics of one grain (Meng15 Sec. 4.2, Table 1)",
+               "out/grain_stats", [&](Example& ex) {
+        // Options read later through ex.cli() (lists, r,g,b triples, "exactly one of" rules):
+        // declared here, all before ready().
+        (void)ex.opt_optional<std::string>("preset", "glass-bead|snow|salt|sugar|brown-sugar|sand|flour|rice (a Table 1 grain)");
+        (void)ex.opt_optional<std::string>("shape", "sphere|snow|crystal|rice|flake");
+        (void)ex.opt_optional<std::string>("material", "dielectric|diffuse|absorbing-dielectric");
+        (void)ex.opt_optional<std::string>("ior", "relative index of refraction (dielectrics)", "1.5");
+        (void)ex.opt_optional<std::string>("albedo", "Lambertian albedo (diffuse), A or r,g,b", "0.8");
+        (void)ex.opt_optional<std::string>("interior-sigma-a", "absorption inside the grain per bounding radius, S or r,g,b", "0");
+        (void)ex.opt_optional<std::string>("interior-sigma-s", "scattering inside the grain per bounding radius, S or r,g,b", "0");
+        (void)ex.opt_optional<std::string>("interior-g", "HG asymmetry of the interior scattering", "0");
+        (void)ex.opt_optional<std::string>("grain-radius", "radius R of the grain's bounding sphere, 0 < R <= 1");
+        (void)ex.opt_optional<std::string>("grain-seed", "seed of the procedural shape", "1");
+        const auto level = ex.opt<std::uint64_t>("mesh-level", 5, "icosphere subdivision level of mesh grains (20*4^level triangles)");
+        const auto rays = ex.opt<std::uint64_t>("rays", 200000, 2000000, "incident rays");
+        (void)ex.opt_optional<std::string>("load", "FILE[,FILE...]: statistics saved earlier (.scat) instead of running the scatterometer");
+        (void)ex.opt_optional<std::string>("weights", "w1,w2,...: mix the grains of --preset/--load (Meng15 Sec. 4.2.3); w >= 0, positive sum");
+        ex.ready();
+        const Cli& cli = ex.cli();
+        const MpiSession& mpi = ex.mpi();
+        const auto& out = ex.out();
+        const int threads = ex.threads();
 
         // Where the statistics come from: saved files (--load), presets (--preset, a list mixes
         // them with --weights), or one grain described on the command line (--shape ...).
@@ -110,17 +108,15 @@ int main(int argc, char** argv) {
         std::string source;
         double secs = 0;
         gl::ScatterometerConfig cfg;
-        cfg.rays = cli.integer("rays", full ? 2000000 : 200000);
-        cfg.seed = cli.seed();
-        const auto level = cli.integer("mesh-level", 5);
+        cfg.rays = rays;
+        cfg.seed = ex.seed();
         if (level > 7) throw cli_error("--mesh-level must be <= 7");
         auto run = [&](const gl::GrainPreset& g) {
             const auto scat = gl::ScatterometerGrain::procedural(g.shape, g.radius, g.material, g.seed, int(level));
             // This rank's contiguous share of the ray blocks (all of them on one rank).
             const auto [b0, b1] = mpi.block_range(gl::scatterometer_blocks(cfg.rays));
             constexpr std::uint64_t bs = gl::ScatterometerTally::block_size;
-            ProgressBar bar("scatterometer " + g.name, std::min(cfg.rays, b1 * bs) - std::min(cfg.rays, b0 * bs));
-            bar.quiet(!mpi.root());
+            auto bar = ex.progress("scatterometer " + g.name, std::min(cfg.rays, b1 * bs) - std::min(cfg.rays, b0 * bs));
             std::uint64_t last = 0;
             cfg.progress = [&](std::uint64_t done, std::uint64_t) {
                 bar.advance(done - last);
@@ -186,7 +182,7 @@ int main(int argc, char** argv) {
             parts.push_back(run(grain));
             names.push_back(grain.name);
         }
-        if (!mpi.root()) return 0;  // rank 0 mixes, writes and prints
+        if (!ex.root()) return ex.finish({});  // rank 0 mixes, writes and prints
         if (parts.empty()) throw cli_error("nothing to do: empty --preset/--load list");
         if (parts.size() > 1 && !cli.has("weights"))
             throw cli_error("a list of " + std::to_string(parts.size()) + " grains needs --weights (one per grain)");
@@ -214,19 +210,8 @@ int main(int argc, char** argv) {
                      phase.pdf_cos_theta(mid, 1), phase.pdf_cos_theta(mid, 2)});
         }
         const auto csv_path = out / (stem + "_phase.csv");
-        std::string title = label;  // safe inside a Python string literal
-        for (char& ch : title)
-            if (ch == '\'' || ch == '\\') ch = '_';
         csv.write(csv_path);
-        plot_with_matplotlib(out / (stem + "_phase.py"),
-                             "d = read_csv(r'''" + csv_path.string() + "''')\n"
-                             "fig, ax = plt.subplots(figsize=(6,4))\n"
-                             "for k, c in (('p_r','r'),('p_g','g'),('p_b','b')):\n"
-                             "    ax.semilogy(d['theta_deg'], np.array(d[k]) / (2*np.pi), color=c, label=k)\n"
-                             "ax.set_xlabel('scattering angle theta [deg]'); ax.set_ylabel('Phi [1/sr]')\n"
-                             "ax.set_title('" + title + ": scatterometer phase function (Meng15 Sec. 4.2.1)')\n"
-                             "ax.legend(); fig.tight_layout(); fig.savefig(png, dpi=120)\n",
-                             out / (stem + "_phase.png"));
+        ex.plot("grain_stats", csv_path, out / (stem + "_phase.png"), {label});
 
         if (!source.empty() || mixed) {
             std::printf("grain %s (%s%s), %llu rays%s\n", label.c_str(), source.empty() ? "scatterometer" : source.c_str(),
@@ -254,13 +239,12 @@ int main(int argc, char** argv) {
                         col->lambda_s, stats.alpha_s_avg(), col->alpha_s);
         }
         std::printf("  wrote %s, %s\n", (out / (stem + ".scat")).c_str(), csv_path.c_str());
-        Json j;
+        auto j = ex.summary();
         j.num("beta", stats.beta())
             .num("lambda_delta", stats.lambda_delta())
             .num("lambda_s", stats.lambda_s_avg())
             .num("alpha_s", stats.alpha_s_avg())
-            .num("g", stats.g_avg())
-            .integer("ranks", mpi.size());
+            .num("g", stats.g_avg());
         if (source.empty()) {          // the scatterometer ran (not --load)
             std::vector<double> ranges;  // [begin, end) ray-block range of each rank
             const auto nb = gl::scatterometer_blocks(cfg.rays);
@@ -271,7 +255,6 @@ int main(int argc, char** argv) {
             }
             j.nums("rank_blocks", ranges);
         }
-        std::cout << j.str() << std::endl;
-        return 0;
+        return ex.finish(j);
     });
 }
