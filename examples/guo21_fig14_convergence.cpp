@@ -9,6 +9,11 @@
 //
 //   guo21_fig14_convergence [--quality quick|full] [--out DIR] [--seed S] [--threads N]
 //                           [--spp N] [--width W] [--counts 1e4,1e5,...] [--query-radius-mm R]
+//                           [--checkpoint SECONDS] [--resume]
+//
+// On the example harness: with --checkpoint every render keeps a checkpoint in --out, so a killed
+// full-quality run (N = 1e7) resumes with --resume where it stopped (images byte-identical to an
+// uninterrupted run; the timings of a resumed run count only what it rendered itself).
 //
 // The query radius is r_c = 2 mm (r_c / r_p = 200; the equivalent k of Eq. 23 is printed): the
 // membership rule's mean-extinction factor (1 + r_p/r_c)^2 (1 - e^-c)/c, c = C_t / (pi r_c^2), is
@@ -25,9 +30,8 @@
 #include <iostream>
 #include <memory>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
-#include "common/progress.hpp"
+#include "common/checkpoint.hpp"
+#include "common/harness.hpp"
 #include "grainlight/integrators/discrete_vpt.hpp"
 #include "grainlight/integrators/render.hpp"
 #include "grainlight/media/discrete_particles.hpp"
@@ -68,28 +72,23 @@ double rel_rmse(const gl::Image& a, const gl::Image& b, double mean_b) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    return gl_examples::run_main("guo21_fig14_convergence", [&]() -> int {
-        gl_examples::Cli cli(argc, argv, "guo21_fig14_convergence",
-                             "Guo21 Fig. 14: discrete media converge to their paired continuous media as N grows");
-        cli.common_options("out/guo21_fig14_convergence")
-            .option("spp", "samples per pixel (default 48 quick, 64 full)")
-            .option("width", "image width (default 80 quick, 512 full); height = 3/4 width")
-            .option("counts", "particle counts (default 1e4,1e5,1e6 quick; 1e4,1e5,1e6,1e7 full)")
-            .option("query-radius-mm", "query-cylinder radius r_c [mm]", "2");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const auto out = cli.out_dir("out/guo21_fig14_convergence");
-        const int threads = cli.threads();
-        const int width = int(cli.integer("width", full ? 512 : 80));
+    return gl_examples::run(
+        argc, argv, "guo21_fig14_convergence",
+        "Guo21 Fig. 14: discrete media converge to their paired continuous media as N grows",
+        "out/guo21_fig14_convergence", [&](gl_examples::Example& ex) {
+        const int spp = int(ex.opt<std::uint64_t>("spp", 48, 64, "samples per pixel"));
+        const int width = int(ex.opt<std::uint64_t>("width", 80, 512, "image width; height = 3/4 width"));
+        const std::vector<double> counts =
+            ex.opt<std::vector<double>>("counts", {1e4, 1e5, 1e6}, {1e4, 1e5, 1e6, 1e7}, "particle counts");
+        const double r_c = ex.opt<double>("query-radius-mm", 2.0, "query-cylinder radius r_c [mm]") * 1e-3;
+        ex.checkpointable();
+        ex.ready();
+        const auto& out = ex.out();
         if (width < 8 || width > 8192) throw gl_examples::cli_error("--width must be in [8, 8192]");
         const int height = width * 3 / 4;
-        const int spp = int(cli.integer("spp", full ? 64 : 48));
         if (spp < 1 || spp > 65536) throw gl_examples::cli_error("--spp must be in [1, 65536]");
-        const std::vector<double> counts = cli.list("counts", full ? std::vector<double>{1e4, 1e5, 1e6, 1e7}
-                                                                   : std::vector<double>{1e4, 1e5, 1e6});
         for (double c : counts)
             if (!(c >= 1 && c < 4e9)) throw gl_examples::cli_error("--counts values must be in [1, 4e9)");
-        const double r_c = cli.num("query-radius-mm", 2.0) * 1e-3;
         if (!(r_c > 0 && r_c < 0.1)) throw gl_examples::cli_error("--query-radius-mm must be in (0, 100)");
         const int continuous_spp_factor = 4;
         const double r_um = 10.0, lambda = 0.55, side = 0.4, volume = side * side * side;
@@ -116,10 +115,8 @@ int main(int argc, char** argv) {
                     "(1 + r_p/r_c)^2 (1 - e^-c)/c = %.4f\n",
                     r_c * 1e3, r_c / (r_um * 1e-6), k_equiv, width, factor);
 
-        gl::RenderOptions opt;
-        opt.spp = spp;
-        opt.threads = threads;
-        opt.seed = cli.seed();
+        gl::RenderOptions opt = gl_examples::render_options(ex, spp, "unused");
+        opt.checkpoint = {};  // each render below gets its own checkpoint
         opt.vpt.max_depth = 256;
 
         std::vector<double> Ns, mean_d, mean_c, rel_diff, rmse, noise, sigmas, mem_pp, secs_d;
@@ -134,12 +131,14 @@ int main(int argc, char** argv) {
             const double sigma_t = C_t * double(N) / volume;
             gl::Scene<CMed> csc;
             build_scene(csc, csc.add_medium(CMed(float(sigma_t), float(C_s / C_t), phase)));
-            gl_examples::ProgressBar bar_c("continuous N=" + std::to_string(N), std::uint64_t(2 * height));
+            auto bar_c = ex.progress("continuous N=" + std::to_string(N), std::uint64_t(2 * height));
             gl::RenderOptions opt1 = opt;
             opt1.spp = spp * continuous_spp_factor;
+            opt1.checkpoint = gl_examples::checkpoint_for(ex, "continuous1_N" + std::to_string(N));
             const gl::Image ci1 = gl::render_vpt(csc, camera, opt1, [&](int n) { bar_c.advance(std::uint64_t(n)); }).image();
             gl::RenderOptions opt2 = opt1;
             opt2.seed = opt.seed + 1000003;
+            opt2.checkpoint = gl_examples::checkpoint_for(ex, "continuous2_N" + std::to_string(N));
             const gl::Image ci2 = gl::render_vpt(csc, camera, opt2, [&](int n) { bar_c.advance(std::uint64_t(n)); }).image();
             bar_c.done();
             gl::Image ci = ci1;  // the reference: the average of the two continuous renders
@@ -166,9 +165,11 @@ int main(int argc, char** argv) {
             gl::Scene<DMed> dsc;
             build_scene(dsc, dsc.add_medium(DMed(grid, {model}, ms)));
             const double bytes_pp = double(dsc.medium(0).memory_bytes()) / double(N);
-            gl_examples::ProgressBar bar_d("discrete N=" + std::to_string(N), std::uint64_t(height));
+            auto bar_d = ex.progress("discrete N=" + std::to_string(N), std::uint64_t(height));
+            gl::RenderOptions optd = opt;
+            optd.checkpoint = gl_examples::checkpoint_for(ex, "discrete_N" + std::to_string(N));
             const gl::Image di =
-                gl::render_discrete_vpt(dsc, camera, opt, [&](int n) { bar_d.advance(std::uint64_t(n)); }).image();
+                gl::render_discrete_vpt(dsc, camera, optd, [&](int n) { bar_d.advance(std::uint64_t(n)); }).image();
             bar_d.done();
             const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -194,19 +195,7 @@ int main(int argc, char** argv) {
         }
         const auto csv_path = out / "guo21_fig14_convergence.csv";
         csv.write(csv_path);
-        const auto png = out / "guo21_fig14_convergence_plot.png";
-        gl_examples::plot_with_matplotlib(
-            out / "guo21_fig14_convergence.py",
-            "d = read_csv(r'''" + csv_path.string() + "''')\n"
-            "fig, ax = plt.subplots(1, 2, figsize=(11, 4))\n"
-            "ax[0].semilogx(d['N'], 100 * np.array(d['rel_diff']), 'bo-'); ax[0].axhline(0, color='k', lw=0.5)\n"
-            "ax[0].set_xlabel('N'); ax[0].set_ylabel('mean radiance: discrete / continuous - 1 [%]')\n"
-            "ax[1].loglog(d['N'], d['rel_rmse'], 'ro-', label='discrete vs continuous')\n"
-            "ax[1].loglog(d['N'], d['continuous_noise_rmse'], 'k--', label='continuous vs continuous (noise)')\n"
-            "ax[1].set_xlabel('N'); ax[1].set_ylabel('per-pixel RMS / mean'); ax[1].legend()\n"
-            "fig.suptitle('Guo21 Fig. 14: discrete media converge to the paired continuous media'); fig.tight_layout()\n"
-            "fig.savefig(png, dpi=110)\n",
-            png);
+        ex.plot("guo21_fig14_convergence", csv_path, out / "guo21_fig14_convergence_plot.png");
         std::printf("  paper: \"each discrete medium and its paired continuous medium have the same overall brightness\"; "
                     "graininess fades as N grows (N = 1e7 looks like the continuous medium)\n");
         double max_abs_diff = 0;
@@ -217,9 +206,8 @@ int main(int argc, char** argv) {
         }
         std::printf("  max |rel_diff| = %.4f (issue bound: 5 %% quick, 3 %% full); rel_rmse falls with N: %s\n", max_abs_diff,
                     falls ? "yes" : "no");
-        gl_examples::Json j;
-        j.str("example", "guo21_fig14_convergence")
-            .integer("width", width)
+        auto j = ex.summary();
+        j.integer("width", width)
             .integer("height", height)
             .integer("spp", spp)
             .num("radius_um", r_um)
@@ -243,7 +231,6 @@ int main(int argc, char** argv) {
             .num("continuous_noise_max", *std::max_element(noise.begin(), noise.end()))
             .num("bytes_per_particle_max", *std::max_element(mem_pp.begin(), mem_pp.end()))
             .str("csv", csv_path.string());
-        std::cout << j.str() << std::endl;
-        return 0;
+        return ex.finish(j);
     });
 }

@@ -67,3 +67,12 @@ if(TARGET guo21_fig12_cornell OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT
   set_tests_properties(guo21_fig12_cornell_kill_resume PROPERTIES LABELS "example;discrete;checkpoint" TIMEOUT 300
     PASS_REGULAR_EXPRESSION "byte-identical")
 endif()
+if(TARGET guo21_fig14_convergence OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/guo21_fig14_convergence.cpp))
+  add_test(NAME guo21_fig14_convergence_kill_resume
+           COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/common/kill_resume.sh $<TARGET_FILE:guo21_fig14_convergence>
+                   ${CMAKE_CURRENT_BINARY_DIR}/kill_resume_guo21_fig14
+                   "discrete_N10000.exr continuous_N10000.exr discrete_N100000.exr continuous_N100000.exr"
+                   --counts 1e4,1e5 --width 40 --spp 16 --seed 3)
+  set_tests_properties(guo21_fig14_convergence_kill_resume PROPERTIES LABELS "example;discrete;checkpoint" TIMEOUT 300
+    PASS_REGULAR_EXPRESSION "byte-identical")
+endif()
