@@ -16,10 +16,10 @@
 
 namespace grainlight {
 
-template <LitScene Scene>
 /// Walk callbacks of volumetric path tracing through a discrete-particle medium (see the file
 /// comment): VptCallbacks with next-event estimation at particle scattering vertices.
 /// One object per path (it holds the scene, rng and options of VptCallbacks).
+template <LitScene Scene>
 struct DiscreteVptCallbacks : VptCallbacks<Scene> {
     /// The surface and emission callbacks this extends.
     using Base = VptCallbacks<Scene>;

@@ -144,12 +144,12 @@ inline void particle_optics(const ParticleModel& model, double r_um, double lamb
     C_s = std::max(0.0, C_t - C_a);
 }
 
-template <std::floating_point F = float>
 /// Discrete participating medium of Guo21 (models Medium; see the file comment for membership,
 /// T_A and the forced-collision free flights). Owns its per-species, per-radius-bin optics,
 /// computed once in the constructor; shares the particle grid. Immutable after construction:
 /// every const member may be called from any number of threads at once.
 /// @tparam F floating-point type of rays and weights (particle positions are float).
+template <std::floating_point F = float>
 class DiscreteParticleMedium {
 public:
     /// Floating-point type (Medium concept).
