@@ -131,7 +131,8 @@ struct SurfaceSample {
     Vec3<F> p{F(0)};
     /// Unit outward normal of the boundary at p.
     Vec3<F> n{F(0), F(0), F(1)};
-    /// Boundary area the sample stands for [scene units^2] (> 0; the samples' areas sum to the boundary's).
+    /// Boundary area the sample stands for [scene units^2] (> 0; a set of samples should cover the
+    /// boundary: areas summing to its area, as sphere_surface_samples gives).
     F area = F(0);
 };
 

@@ -57,7 +57,8 @@ struct MsTableOptions {
     double z_max = 8.0;
     std::uint64_t photons = 200000;  ///< source particles
     double escape_radius = 24.0;     ///< particles beyond this distance (mfp) are dropped
-    /// Seed of the walks: particle i uses Rng::from_key(seed, ., i), so a seed gives the same table on any thread count.
+    /// Seed of the walks: source particle i draws from Rng::from_key(seed, stream, i), so a seed gives the
+    /// same table on any thread count.
     std::uint64_t seed = 1;
     int blocks = 16;            ///< fixed number of tally blocks (deterministic for any thread count)
 };
