@@ -16,13 +16,23 @@
 
 namespace grainlight {
 
+/// Walk callbacks of volumetric path tracing through a discrete-particle medium (see the file
+/// comment): VptCallbacks with next-event estimation at particle scattering vertices.
+/// One object per path (it holds the scene, rng and options of VptCallbacks).
 template <LitScene Scene>
 struct DiscreteVptCallbacks : VptCallbacks<Scene> {
+    /// The surface and emission callbacks this extends.
     using Base = VptCallbacks<Scene>;
+    /// Floating-point type (the scene's).
     using F = typename Scene::Float;
+    /// Spectrum type (the scene's).
     using S = typename Scene::Spectrum;
 
     template <class M>
+    /// Walk callback at a scattering event of medium m: when NEE is on, the medium chose the
+    /// direction and `it.p` is a particle's centre (m.particle_at), next-event estimation with that
+    /// particle's phase function (MIS against phase sampling); media without particle_at get none.
+    /// Returns true (the path goes on).
     bool on_scatter(PathState<F, S>& st, const Interaction<F, S>& it, const M& m) noexcept {
         this->last_nee = false;
         if constexpr (requires { m.particle_at(it.p); m.phase_eval(0u, it.p, it.p); }) {

@@ -48,9 +48,25 @@ struct MsTableOptions;
 
 /// Grid of an MsTable: cylindrical cells (rho, z) in mean free paths times direction bins.
 struct MsTableGrid {
+    /// @var n_rho
+    /// Radial cells over [0, rho_max] ([1, 4096]).
+    /// @var n_z
+    /// Axial cells over [z_min, z_max] ([1, 4096]).
+    /// @var n_theta
+    /// Polar direction bins over [0, pi] ([1, 256]).
+    /// @var n_phi
+    /// Azimuth bins over [0, pi] (folded by mirror symmetry; [1, 256]).
     std::uint32_t n_rho = 32, n_z = 64, n_theta = 16, n_phi = 8;
+    /// @var rho_max
+    /// Radial extent of the grid [mean free paths] (> 0).
+    /// @var z_min
+    /// Lower axial bound of the grid [mean free paths].
+    /// @var z_max
+    /// Upper axial bound of the grid [mean free paths] (> z_min).
     double rho_max = 8.0, z_min = -8.0, z_max = 8.0;
+    /// Number of direction bins n_theta n_phi.
     [[nodiscard]] std::size_t directions() const noexcept { return std::size_t(n_theta) * n_phi; }
+    /// Number of spatial cells n_rho n_z.
     [[nodiscard]] std::size_t cells() const noexcept { return std::size_t(n_rho) * n_z; }
     /// Throws invalid_argument naming the first bad field.
     void check(const char* who) const {
@@ -67,8 +83,11 @@ struct MsTableGrid {
 /// Up to four direction bins with bilinear weights (or one bin with weight 1: nearest lookup),
 /// computed once per (source, receiver) pair and shared by all channels.
 struct MsDirection {
+    /// Direction-bin indices j = it n_phi + ip (the first `count` are used).
     std::array<std::size_t, 4> bin{};
+    /// Bilinear weights of the bins (sum 1 over the first `count`).
     std::array<double, 4> weight{};
+    /// Number of bins used: 1 (nearest lookup) to 4 (bilinear).
     int count = 0;
 };
 
@@ -76,6 +95,7 @@ struct MsDirection {
 template <std::size_t N>
 class MsTable {
 public:
+    /// Version of the table's container layout (core/serialization.hpp), checked by load.
     static constexpr std::uint32_t file_version = 1;
     /// Container kind "MSTB" (the same value as precompute/ms_table.hpp's ms_table_file_kind).
     static constexpr std::uint32_t file_kind = std::uint32_t('M') | (std::uint32_t('S') << 8) |
@@ -228,18 +248,28 @@ public:
         const double ph = pi_v<double> * (double(j % grid_.n_phi) + 0.5) / grid_.n_phi * (mirror ? -1.0 : 1.0);
         return {std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)};
     }
+    /// Flat index of channel c, cell (iz, ir) and direction bin j in values() (layout in the file comment; not range-checked).
     [[nodiscard]] std::size_t value_index(std::size_t c, std::size_t iz, std::size_t ir, std::size_t j) const noexcept {
         return ((c * grid_.n_z + iz) * grid_.n_rho + ir) * grid_.directions() + j;
     }
 
+    /// The table's grid.
     [[nodiscard]] const MsTableGrid& grid() const noexcept { return grid_; }
+    /// Single-scattering albedo of channel c (< N; not checked) the table was built for.
     [[nodiscard]] double albedo(std::size_t c) const noexcept { return albedo_[c]; }
+    /// Albedos of all channels.
     [[nodiscard]] const std::array<double, N>& albedos() const noexcept { return albedo_; }
+    /// Mean cosine g of the phase function the table was built with.
     [[nodiscard]] double mean_cosine() const noexcept { return g_; }
+    /// Number of source particles traced to build the table.
     [[nodiscard]] std::uint64_t photons() const noexcept { return photons_; }
+    /// Number of stored values (N n_rho n_z n_theta n_phi; 0 for a default-constructed table).
     [[nodiscard]] std::size_t size() const noexcept { return values_.size(); }
+    /// True for a default-constructed (empty) table.
     [[nodiscard]] bool empty() const noexcept { return values_.empty(); }
+    /// The values in 1 / (l^3 sr) per unit source power (layout in the file comment).
     [[nodiscard]] const std::vector<float>& values() const noexcept { return values_; }
+    /// Memory held by the values, in bytes.
     [[nodiscard]] std::size_t bytes() const noexcept { return values_.size() * sizeof(float); }
 
 private:

@@ -127,8 +127,12 @@ concept TangentPlaneBoundary = requires(const B& b, const Vec3<F>& p, Vec3<F>& q
 /// A light surface sample on the boundary: position, unit outward normal, area it represents.
 template <std::floating_point F>
 struct SurfaceSample {
+    /// Position on the boundary [scene units].
     Vec3<F> p{F(0)};
+    /// Unit outward normal of the boundary at p.
     Vec3<F> n{F(0), F(0), F(1)};
+    /// Boundary area the sample stands for [scene units^2] (> 0; a set of samples should cover the
+    /// boundary: areas summing to its area, as sphere_surface_samples gives).
     F area = F(0);
 };
 
@@ -181,7 +185,13 @@ struct PointBasedOptions {
     /// needs a TangentPlaneBoundary). Off by default (the paper's Eq. 7 as is): it removes the
     /// over-count at 5 mean free paths but over-corrects by ~20 % at 20-50 (docs/wang18.md).
     bool ms_boundary_image = false;
+    /// Offset of the mirrored source beyond the tangent plane, in transport mean free paths
+    /// 1 / (sigma_t (1 - albedo g)) (used only with ms_boundary_image).
     F ms_image_offset = F(0);
+    /// @var single
+    /// Compute single scattering (Eq. 5).
+    /// @var double_
+    /// Compute double scattering (Eq. 6).
     bool single = true, double_ = true, multiple = true;  ///< components to compute
     /// Eq. 8 bounced multiple scattering through surface samples (needs `bounce_samples` > 0).
     bool bounced = true;
@@ -194,6 +204,8 @@ struct PointBasedOptions {
     /// Eq. 8 next to a bounce sample: spread its light over its disk (ring quadrature) instead
     /// of evaluating the kernel at its centre only.
     bool bounce_disk_quadrature = true;
+    /// Generations of Eq. 8 bounced light: 1 = light reflected once at the boundary; 2 = also twice
+    /// (with bounce_series, the later generations as a geometric series).
     int bounce_generations = 2;
     bool bounce_series = false;     ///< generation 2: sum the later generations as a geometric series     ///< 1: light reflected once; 2: + twice, later ones as a series
     int leaf_items = 8;             ///< octree leaf size (paper: 8)
@@ -202,7 +214,16 @@ struct PointBasedOptions {
 /// Radiance split by component (W sr^-1 m^-2 per channel).
 template <class S>
 struct PointBasedComponents {
+    /// @var single
+    /// Single scattering.
+    /// @var double_
+    /// Double scattering.
+    /// @var multiple
+    /// Multiple scattering (table term, Eq. 7).
+    /// @var bounced
+    /// Bounced multiple scattering (Eq. 8).
     S single{0}, double_{0}, multiple{0}, bounced{0};
+    /// Sum of the four components.
     [[nodiscard]] S total() const noexcept { return single + double_ + multiple + bounced; }
 };
 
@@ -212,14 +233,36 @@ struct PointBasedComponents {
 template <class Phase, class Boundary, std::size_t N = Phase::Spectrum::size>
 class PointBasedRenderer {
 public:
+    /// Floating-point type (the phase function's).
     using F = typename Phase::Float;
+    /// Spectrum type (the phase function's).
     using S = typename Phase::Spectrum;
+    /// The homogeneous medium the renderer is built for.
     using Medium = ContinuousMedium<Phase, S>;
+    /// Octree item: a volume or surface light sample (position, direction, power).
     using Item = OctreeItem<F, S>;
 
     /// A volume sample's box: centre, frame (e1, e2, d), half extents, 1 / volume.
     struct Box {
+        /// @var c
+        /// Centre (the volume sample's position) [scene units].
+        /// @var e1
+        /// First unit axis across the light ray.
+        /// @var e2
+        /// Second unit axis across the light ray.
+        /// @var d
+        /// Unit axis along the light ray.
         Vec3<F> c, e1, e2, d;
+        /// @var h1
+        /// Half extent along e1 (half the side of the surface sample's footprint) [scene units].
+        /// @var h2
+        /// Half extent along e2 [scene units].
+        /// @var hd
+        /// Half extent along d (half the volume step) [scene units].
+        /// @var inv_volume
+        /// 1 / box volume [1/scene units^3] (divided by the inside fraction when clip_boxes is on).
+        /// @var source_area
+        /// Area of the surface sample the light ray entered through (S_v of Eq. 4) [scene units^2].
         F h1, h2, hd, inv_volume, source_area;
     };
 
@@ -227,6 +270,11 @@ public:
     /// n_inside / n_outside > 0; \param ms optional multiple-scattering table (nullptr: no
     /// multiple term), must have the medium's albedo and outlive the renderer. Throws
     /// invalid_argument on bad input.
+    /// \param boundary convex shape of the medium (outward normals; copied);
+    /// \param surface light surface samples on the boundary (>= 1);
+    /// \param light the light source, sampled at every surface sample;
+    /// \param opt renderer options (validated here, copied);
+    /// \param rng random numbers for the light points and the volume-sample offsets (same seed, same samples).
     PointBasedRenderer(const Medium& medium, F eta, const Boundary& boundary,
                        const std::vector<SurfaceSample<F>>& surface, const Light<F, S>& light,
                        const PointBasedOptions<F>& opt, Rng& rng, const MsTable<N>* ms = nullptr)
@@ -288,9 +336,13 @@ public:
         }
     }
 
+    /// Octree over the volume light samples (Sec. 4).
     [[nodiscard]] const Octree<F, S>& volume_tree() const noexcept { return tree_; }
+    /// Box of every volume sample, indexed by the sample's item id.
     [[nodiscard]] const std::vector<Box>& boxes() const noexcept { return boxes_; }
+    /// Number of volume light samples.
     [[nodiscard]] std::size_t volume_sample_count() const noexcept { return tree_.items().size(); }
+    /// Distance Delta between volume samples along a light ray [scene units].
     [[nodiscard]] F volume_step() const noexcept { return step_; }
     /// Memory held by the light samples (Table 3's "mem." without the table): the items and
     /// nodes of the volume, bounce-surface and secondary trees, the volume samples' boxes and
@@ -443,6 +495,7 @@ public:
         }
         return m;
     }
+    /// One channel c of table_response() (c < the spectrum size; not checked).
     [[nodiscard]] F table_response_channel(std::size_t c, const Vec3<F>& rv, const Vec3<F>& dv,
                                            const Vec3<F>& to_cam) const noexcept {
         const MsDirection dir = table_direction(rv, dv, to_cam);
@@ -451,6 +504,9 @@ public:
         const F st = medium_.sigma_t()[c];
         return F(ms_->eval_dir(c, double(rho * st), double(z * st), dir)) * st * st * st;
     }
+    /// Multiple-scattering table direction bin of the exit direction `to_cam`, in the frame of a source
+    /// at offset rv travelling along dv (cos theta about dv, phi from the radial direction folded to
+    /// [0, pi]); bilinear weights when ms_interpolate is on. Needs a table (ms non-null).
     [[nodiscard]] MsDirection table_direction(const Vec3<F>& rv, const Vec3<F>& dv, const Vec3<F>& to_cam) const noexcept {
         const F z = glm::dot(rv, dv);
         const Vec3<F> radial = rv - z * dv;
@@ -482,6 +538,7 @@ public:
     [[nodiscard]] S gather_bounced(const Vec3<F>& P, const Vec3<F>& omega) const noexcept {
         return gather_bounced(P, omega, opt_.cut);
     }
+    /// As gather_bounced(P, omega) with the cut thresholds `cut` instead of the options'.
     [[nodiscard]] S gather_bounced(const Vec3<F>& P, const Vec3<F>& omega, const CutCriterion<F>& cut) const noexcept {
         S acc(F(0));
         if (surf_tree_.items().empty()) return acc;

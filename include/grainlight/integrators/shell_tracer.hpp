@@ -61,10 +61,15 @@ template <class Exact, class Boundary>
     requires PhaseMedium<Exact>
 class ShellSwitchMedium {
 public:
+    /// Floating-point type (the exact medium's).
     using Float = typename Exact::Float;
+    /// Spectrum type (the exact medium's).
     using Spectrum = typename Exact::Spectrum;
+    /// Short name of Float.
     using F = Float;
+    /// Short name of Spectrum.
     using S = Spectrum;
+    /// The shell medium that takes the Fig. 5 steps.
     using Shells = ShellMedium<F, S, Boundary>;
 
     /// \param exact the underlying medium; \param table its shell table (validated);
@@ -73,14 +78,20 @@ public:
         : exact_(std::move(exact)), shells_(std::move(table), boundary, analog_absorption), boundary_(boundary),
           r0_(F(shells_.table().radii.front())) {}
 
+    /// The underlying exact medium.
     [[nodiscard]] const Exact& exact() const noexcept { return exact_; }
+    /// The shell medium (table, boundary query, absorption mode).
     [[nodiscard]] const Shells& shells() const noexcept { return shells_; }
+    /// Phase function of the exact medium (NEE and exact steps; shell exits sample their own direction).
     [[nodiscard]] decltype(auto) phase() const noexcept { return exact_.phase(); }
+    /// Smallest shell radius r_0 (the table's first radius) [scene units].
     [[nodiscard]] F r0() const noexcept { return r0_; }
 
     /// True if a step from p is a shell step (distance to the surface >= r_0).
     [[nodiscard]] bool uses_shell(const Vec3<F>& p) const noexcept { return F(boundary_(Vec3d(p))) >= r0_; }
 
+    /// Next event along `ray` before t_max: a shell step (ShellMedium::sample_interaction) if
+    /// uses_shell(ray.o), else an exact free flight of the underlying medium.
     [[nodiscard]] Interaction<F, S> sample_interaction(const Ray<F>& ray, F t_max, Rng& rng) const noexcept {
         if (uses_shell(ray.o)) return shells_.sample_interaction(ray, t_max, rng);
         return exact_.sample_interaction(ray, t_max, rng);
@@ -121,11 +132,17 @@ private:
 /// `table` must have been built from the slab's own medium (sigma_t = 1, its albedo and g).
 class ShellSlab {
 public:
+    /// Floating-point type (double).
     using F = double;
+    /// Spectrum type: one grey double channel.
     using S = Spectrum<1, double>;
+    /// Henyey-Greenstein phase of the slab medium.
     using Phase = HenyeyGreenstein<double, S>;
+    /// The slab's exact continuous medium (sigma_t = 1).
     using Exact = ContinuousMedium<Phase, S>;
+    /// The medium the walks use: shells inside, exact steps within r_0 of a face.
     using MediumType = ShellSwitchMedium<Exact, SlabDistance>;
+    /// The slab scene over MediumType (Fresnel faces, R/T estimator of scene/slab.hpp).
     using SceneType = SlabScene<MediumType>;
 
     /// Throws invalid_argument for bad slab parameters (as SlabProblem) or an invalid table.
@@ -133,7 +150,9 @@ public:
         : problem_(p), scene_(MediumType(problem_.scene().medium(0), std::move(table), SlabDistance{p.optical_depth}),
                               p.optical_depth, p.ior) {}
 
+    /// The slab parameters (as given, validated).
     [[nodiscard]] const SlabParams& params() const noexcept { return problem_.params(); }
+    /// The slab scene the walks run in.
     [[nodiscard]] const SceneType& scene() const noexcept { return scene_; }
 
     /// Paths [first, first + count) with Pcg32::from_key(seed, path, 0) (thread-count
@@ -198,6 +217,16 @@ struct ShellHandBack {
 
 /// What a shell-traced path did (for statistics).
 struct ShellTraceStats {
+    /// @var paths
+    /// Paths traced (calls of trace() or trace_to_boundary()).
+    /// @var steps
+    /// Shell steps taken.
+    /// @var scattered
+    /// Shell steps that ended in a scattering (scattered exits).
+    /// @var exits
+    /// Shell steps whose exit point fell outside the volume (ShellStepKind::exited).
+    /// @var straight_escapes
+    /// Shell steps that left the volume unscattered (ShellStepKind::escaped).
     std::uint64_t paths = 0, steps = 0, scattered = 0, exits = 0, straight_escapes = 0;
 };
 
@@ -225,8 +254,13 @@ struct ShellTraceStats {
 template <class S, class Volume>
 class ShellTracer {
 public:
+    /// Shell medium over the volume's distance query (absorption weighted, not analog).
     using Shells = ShellMedium<double, S, Volume>;
 
+    /// Tracer over shell table `table` (validated) and volume `volume` (copied); throws
+    /// grainlight::invalid_argument naming the option for min_scatter < 0, max_steps < 1, a NaN
+    /// switch_depth, or 0 <= hand_back_depth < r_0. Immutable afterwards: const members are
+    /// thread-safe (each thread passes its own Rng and stats).
     ShellTracer(ShellTable table, Volume volume, ShellTracerOptions opt = {})
         : shells_(std::move(table), volume, /*analog_absorption*/ false), volume_(std::move(volume)), opt_(opt) {
         check_argument(opt.min_scatter >= 0, "ShellTracer", "min_scatter", opt.min_scatter, ">= 0");
@@ -278,9 +312,13 @@ public:
         return hb;
     }
 
+    /// The shell medium (table and volume query).
     [[nodiscard]] const Shells& shells() const noexcept { return shells_; }
+    /// The volume (distance and exit-distance queries).
     [[nodiscard]] const Volume& volume() const noexcept { return volume_; }
+    /// The options the tracer was built with.
     [[nodiscard]] const ShellTracerOptions& options() const noexcept { return opt_; }
+    /// Depth below the surface from which paths may switch to shells (options().switch_depth, or r_0 if that is < 0).
     [[nodiscard]] double switch_depth() const noexcept { return switch_depth_; }
 
     /// The switch rule (Sec. 4.2): at least min_scatter explicit events and at least the switch

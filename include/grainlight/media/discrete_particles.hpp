@@ -19,7 +19,7 @@
 ///    member of the next segment (s = 0 there; members need s > 0);
 ///  - Eq. 24 over a query sphere, Q(y, theta) = sum_{|p_i - y| < r_i + r_c} C_s,i f_i(theta) / mu_i
 ///    with mu_i = 4/3 pi (r_i + r_c)^3, is `query_sphere_q`: its placement average is exactly
-///    N_0 <C_s f> (Eq. 17 times sigma_s).
+///    N_0 \<C_s f\> (Eq. 17 times sigma_s).
 /// Averaged over Poisson placements, E[T_A] = exp(-n pi (r_p + r_c)^2 L (1 - e^{-c})), c = C_t / A,
 /// i.e. the mean extinction is n C_t times (1 + r_p / r_c)^2 (1 - e^{-c}) / c
 /// (`membership_extinction_factor`): -> 1 for r_c >> r_p (Beer-Lambert), and
@@ -89,6 +89,9 @@ namespace grainlight {
     return (1 + r_p / r_c) * (1 + r_p / r_c) * g;
 }
 
+/// Settings of a DiscreteParticleMedium: wavelength, query-cylinder radius r_c (Guo21 Eq. 23),
+/// diffraction on/off (-FD), radius binning of the per-particle optics, forced-collision floor
+/// q_min and the phase-table resolution. Validated by the DiscreteParticleMedium constructor.
 struct DiscreteMediumSettings {
     double wavelength_um = 0.55;  ///< vacuum wavelength of the (grey) channel
     double query_radius = 0;      ///< r_c [scene units], > 0 and <= the grid's dilation
@@ -102,7 +105,14 @@ struct DiscreteMediumSettings {
 template <std::floating_point F>
 struct ParticleBinOptics {
     double r_rep_um = 0;          ///< radius the optics were computed at
+    /// @var C_t_um2
+    /// Extinction cross section C_t at r_rep_um [um^2].
+    /// @var C_s_um2
+    /// Scattering cross section C_s at r_rep_um [um^2].
+    /// @var C_a_um2
+    /// Absorption cross section C_a = C_t - C_s at r_rep_um [um^2].
     double C_t_um2 = 0, C_s_um2 = 0, C_a_um2 = 0;
+    /// Normalised phase function of the bin (tabulated from |S1|^2 + |S2|^2 at r_rep_um).
     MiePhase<F, Spectrum<1, F>> phase;
 };
 
@@ -134,12 +144,21 @@ inline void particle_optics(const ParticleModel& model, double r_um, double lamb
     C_s = std::max(0.0, C_t - C_a);
 }
 
+/// Discrete participating medium of Guo21 (models Medium; see the file comment for membership,
+/// T_A and the forced-collision free flights). Owns its per-species, per-radius-bin optics,
+/// computed once in the constructor; shares the particle grid. Immutable after construction:
+/// every const member may be called from any number of threads at once.
+/// @tparam F floating-point type of rays and weights (particle positions are float).
 template <std::floating_point F = float>
 class DiscreteParticleMedium {
 public:
+    /// Floating-point type (Medium concept).
     using Float = F;
+    /// Spectrum type: one grey channel of F (Medium concept).
     using Spectrum = grainlight::Spectrum<1, F>;
+    /// Short name of Spectrum.
     using S = Spectrum;
+    /// Optics of one radius bin (ParticleBinOptics).
     using Bin = ParticleBinOptics<F>;
 
     /// `models`: one ParticleModel per species of the grid's cloud (or one for all).
@@ -212,15 +231,22 @@ public:
         sigma_s_ = sum_cs / cloud.volume();
     }
 
+    /// The particle grid the medium gathers through (shared, not copied).
     [[nodiscard]] const ParticleGrid& grid() const noexcept { return *grid_; }
+    /// The particle cloud of the grid (positions and radii in scene units).
     [[nodiscard]] const ParticleCloud& cloud() const noexcept { return grid_->cloud(); }
+    /// The settings the medium was built with.
     [[nodiscard]] const DiscreteMediumSettings& settings() const noexcept { return st_; }
+    /// Query-cylinder radius r_c [scene units].
     [[nodiscard]] F query_radius() const noexcept { return r_c_; }
     /// Bulk (global) sigma_t = sum_i C_t,i / V and sigma_s [1/scene unit] (Eq. 16 over the domain;
     /// Guo21 Sec. 5.5's global properties).
     [[nodiscard]] double global_sigma_t() const noexcept { return sigma_t_; }
+    /// Bulk (global) sigma_s = sum_i C_s,i / V [1/scene unit] (see global_sigma_t()).
     [[nodiscard]] double global_sigma_s() const noexcept { return sigma_s_; }
+    /// Number of species (one optics set per species).
     [[nodiscard]] std::size_t species_count() const noexcept { return species_.size(); }
+    /// Radius bins of species `species` (< species_count(); not checked), in order of radius.
     [[nodiscard]] const std::vector<Bin>& bins(std::size_t species) const noexcept { return species_[species].bins; }
 
     /// C_t of particle i [scene units^2] and its albedo.
@@ -229,10 +255,12 @@ public:
         const SpeciesBins& sb = species_[cloud().species_of(i)];
         return sb.ct_over_r2[std::size_t(sb.bin_of(p.r))] * p.r * p.r;
     }
+    /// Single-scattering albedo C_s,i / C_t,i of particle i (that of its radius bin).
     [[nodiscard]] F albedo(std::uint32_t i) const noexcept {
         const SpeciesBins& sb = species_[cloud().species_of(i)];
         return sb.albedo[std::size_t(sb.bin_of(cloud()[i].r))];
     }
+    /// Phase function of particle i (that of its radius bin).
     [[nodiscard]] const MiePhase<F, S>& phase_of(std::uint32_t i) const noexcept {
         const SpeciesBins& sb = species_[cloud().species_of(i)];
         return sb.bins[std::size_t(sb.bin_of(cloud()[i].r))].phase;
@@ -468,20 +496,32 @@ private:
 template <class Phase>
 class ForcedCollisionMedium {
 public:
+    /// Floating-point type (the phase function's).
     using Float = typename Phase::Float;
+    /// Short name of Float.
     using F = Float;
+    /// Spectrum type: one grey channel of F (Medium concept).
     using Spectrum = grainlight::Spectrum<1, F>;
+    /// Short name of Spectrum.
     using S = Spectrum;
 
+    /// Medium of extinction coefficient sigma_t >= 0 [1/scene unit], single-scattering albedo in
+    /// [0, 1], phase function `phase` and forced-collision floor q_min in [0, 1) (0: analog free
+    /// flights); throws grainlight::invalid_argument naming the parameter otherwise.
     ForcedCollisionMedium(F sigma_t, F albedo, Phase phase, F q_min = F(0.5))
         : sigma_t_(sigma_t), albedo_(albedo), q_min_(q_min), phase_(std::move(phase)) {
         check_argument(std::isfinite(sigma_t) && sigma_t >= F(0), "ForcedCollisionMedium", "sigma_t", sigma_t, "[0, inf)");
         check_argument(albedo >= F(0) && albedo <= F(1), "ForcedCollisionMedium", "albedo", albedo, "[0, 1]");
         check_argument(q_min >= F(0) && q_min < F(1), "ForcedCollisionMedium", "q_min", q_min, "[0, 1)");
     }
+    /// Phase function (NEE at scattering vertices).
     [[nodiscard]] const Phase& phase() const noexcept { return phase_; }
+    /// Extinction coefficient sigma_t [1/scene unit].
     [[nodiscard]] F sigma_t() const noexcept { return sigma_t_; }
+    /// Transmittance exp(-sigma_t t) over [0, t] (deterministic; rng unused).
     [[nodiscard]] S transmittance(const Ray<F>&, F t, Rng&) const noexcept { return S(std::exp(-sigma_t_ * t)); }
+    /// Forced-collision free flight over [0, t_max] (see the class comment): a scatter event with
+    /// weight (P / q) albedo or an escape at t_max with weight (1 - P) / (1 - q).
     [[nodiscard]] Interaction<F, S> sample_interaction(const Ray<F>& ray, F t_max, Rng& rng) const noexcept {
         Interaction<F, S> it;
         const F P = std::isinf(t_max) ? (sigma_t_ > F(0) ? F(1) : F(0)) : -std::expm1(-sigma_t_ * t_max);
@@ -511,15 +551,21 @@ private:
 template <std::floating_point F = float>
 class ExplicitSphereMedium {
 public:
+    /// Floating-point type (Medium concept).
     using Float = F;
+    /// Spectrum type: one grey channel of F (Medium concept).
     using Spectrum = grainlight::Spectrum<1, F>;
+    /// Short name of Spectrum.
     using S = Spectrum;
 
+    /// Spheres of `grid`'s cloud (not null) with relative refractive index eta (> 0, != 1, finite);
+    /// throws grainlight::invalid_argument otherwise. Immutable: const members are thread-safe.
     ExplicitSphereMedium(std::shared_ptr<const ParticleGrid> grid, F eta) : grid_(std::move(grid)), eta_(eta) {
         check_argument(bool(grid_), "ExplicitSphereMedium", "grid", "null", "a particle grid");
         check_argument(std::isfinite(eta) && eta > F(0) && eta != F(1), "ExplicitSphereMedium", "eta", eta,
                        "> 0, != 1 (finite)");
     }
+    /// The particle grid (shared, not copied).
     [[nodiscard]] const ParticleGrid& grid() const noexcept { return *grid_; }
 
     /// Sphere containing p, or -1.
@@ -550,6 +596,8 @@ public:
         return best;
     }
 
+    /// Transmittance along `ray` over [0, t]: 0 if the origin is inside a sphere or a sphere surface
+    /// is hit before t, else 1 (deterministic; rng unused).
     [[nodiscard]] S transmittance(const Ray<F>& ray, F t, Rng&) const noexcept {
         const Vec3<float> o(ray.o), d(ray.d);
         if (sphere_containing(o) >= 0) return S(F(0));
@@ -557,6 +605,9 @@ public:
         return S(first_hit(o, d, float(t), th) >= 0 ? F(0) : F(1));
     }
 
+    /// Next surface event along `ray` before t_max: the exit of the sphere holding the origin or the
+    /// first sphere hit, where the path is reflected (Fresnel probability) or refracted (the
+    /// direction is chosen here: has_direction, no NEE); escape at t_max if none.
     [[nodiscard]] Interaction<F, S> sample_interaction(const Ray<F>& ray, F t_max, Rng& rng) const noexcept {
         Interaction<F, S> it;
         const Vec3<float> o(ray.o), d(ray.d);

@@ -132,13 +132,13 @@ struct GrainStats {
     std::array<std::vector<double>, channels> phase_hist;  ///< P(exit and cos theta bin), per channel
     std::array<std::vector<double>, channels> tt_table;    ///< P(exit and (mu, along, across, dphi) cell), per channel; index ((mu * along_bins + along) * across_bins + across) * dphi_bins + dphi
 
-    /// Hit probability beta (Meng15 Sec. 4.2.2).
     /// One-line description: rays and the channel-averaged Meng15 Table 1 quantities.
     [[nodiscard]] std::string to_string() const {
         return "GrainStats[" + std::to_string(rays) + " rays, beta " + grainlight::detail::to_display(beta()) + ", lambda_delta " +
                grainlight::detail::to_display(lambda_delta()) + ", alpha_s " + grainlight::detail::to_display(alpha_s_avg()) + ", lambda_s " + grainlight::detail::to_display(lambda_s_avg()) + ", g " +
                grainlight::detail::to_display(g_avg()) + "]";
     }
+    /// Hit probability beta (Meng15 Sec. 4.2.2).
     [[nodiscard]] double beta() const noexcept { return hit; }
     /// Mean pass-through offset lambda_delta (0 if no ray missed).
     [[nodiscard]] double lambda_delta() const noexcept { return hit < 1.0 && miss_chord > 0 ? miss_chord / (1.0 - hit) : 0.0; }

@@ -80,8 +80,12 @@ template <std::floating_point F>
 /// Coordinates of a shell exit (Moon07 Sec. 4.1): cos theta_1 in [-1, 1] and (u, v) in [0,1]^2.
 template <std::floating_point F>
 struct ShellCoords {
+    /// cos theta_1 = n . omega, n = (y - x) / r the exit point's outward shell normal, in [-1, 1].
     F cos_theta1 = F(0);
+    /// First concentric-disk coordinate in [0, 1] of the exit direction's projection on the tangent
+    /// plane at y (axes e1 = the tangent part of omega, e2 = n x e1).
     F u = F(0.5);
+    /// Second concentric-disk coordinate in [0, 1] of the exit direction (see u).
     F v = F(0.5);
 };
 
@@ -123,7 +127,9 @@ inline void shell_exit_from_coords(const Vec3<F>& x, const Vec3<F>& omega, F r, 
 /// The factored shell transport table of Moon07 (see the file comment). Plain data; `validate`
 /// checks every invariant, `save`/`load` use the grainlight container (kind SHEL v1).
 struct ShellTable {
+    /// Container kind of a saved table ("SHEL").
     static constexpr std::uint32_t file_kind = fourcc("SHEL");
+    /// Container version of the saved layout (1), checked by load.
     static constexpr std::uint32_t file_kind_version = 1;
 
     std::vector<double> radii;          ///< shell radii r_i, strictly ascending, > 0
@@ -140,7 +146,9 @@ struct ShellTable {
     std::vector<double> fa;             ///< f_a(j fa_d_max / (size-1)), non-increasing, fa[0] = 1
     std::uint64_t n_paths = 0;          ///< paths the table was estimated from (information)
 
+    /// Number of shells (radii.size()).
     [[nodiscard]] std::size_t n_shells() const noexcept { return radii.size(); }
+    /// Number of direction cells n_u n_v (columns of H).
     [[nodiscard]] std::size_t n_dir() const noexcept { return std::size_t(n_u) * std::size_t(n_v); }
 
     /// Throws grainlight::invalid_argument naming the first violated invariant.
@@ -252,6 +260,7 @@ struct ShellTable {
 /// Distance-to-boundary query of an unbounded medium (always +inf).
 template <std::floating_point F>
 struct InfiniteBoundary {
+    /// +inf for every point (no boundary).
     [[nodiscard]] F operator()(const Vec3<F>&) const noexcept { return std::numeric_limits<F>::infinity(); }
 };
 
@@ -267,6 +276,7 @@ enum class ShellStepKind : std::uint8_t {
 /// Result of one shell step.
 template <std::floating_point F>
 struct ShellStep {
+    /// What the step did.
     ShellStepKind kind = ShellStepKind::straight;
     int shell = 0;             ///< index of the shell used
     F r = F(0);                ///< its radius
@@ -297,7 +307,9 @@ struct ShellStep {
 template <std::floating_point F = double, SpectrumType S = Spectrum<1, F>, class Boundary = InfiniteBoundary<F>>
 class ShellMedium {
 public:
+    /// Floating-point type.
     using Float = F;
+    /// Spectrum type of weights.
     using Spectrum = S;
 
     /// \param table validated Moon07 table (invalid_argument otherwise)
@@ -339,7 +351,9 @@ public:
         }
     }
 
+    /// The shell table (validated).
     [[nodiscard]] const ShellTable& table() const noexcept { return t_; }
+    /// The distance-to-boundary query.
     [[nodiscard]] const Boundary& boundary() const noexcept { return boundary_; }
 
     /// Index of the largest shell with r_i <= dist (0 if none fits).
@@ -442,9 +456,12 @@ public:
     }
 
     /// One call of Moon07 Fig. 5 (advanceRayUsingShells) from x along unit omega.
+    /// \param x start point (inside the medium)
+    /// \param omega unit direction of travel at x
     /// \param t_boundary distance to the medium surface along omega (inf if none)
+    /// \param rng random numbers of the path
     /// \param inside optional inside test bool(const Vec3<F>&) for the "outside the volume" rule:
-    ///        a sampled exit point outside gets direction normalize(y - x) and kind escaped.
+    ///        a sampled exit point outside gets direction normalize(y - x) and kind exited.
     template <class Inside>
     [[nodiscard]] ShellStep<F> step(const Vec3<F>& x, const Vec3<F>& omega, F t_boundary, Rng& rng,
                                     const Inside& inside) const noexcept {

@@ -35,7 +35,16 @@ namespace grainlight {
 
 /// One particle: centre and radius in scene units (16 bytes).
 struct CloudParticle {
+    /// @var x
+    /// Centre x [scene units].
+    /// @var y
+    /// Centre y [scene units].
+    /// @var z
+    /// Centre z [scene units].
+    /// @var r
+    /// Radius [scene units] (> 0).
     float x = 0, y = 0, z = 0, r = 0;
+    /// The centre as a vector [scene units].
     [[nodiscard]] Vec3<float> center() const noexcept { return {x, y, z}; }
 };
 static_assert(sizeof(CloudParticle) == 16, "a cloud particle is 16 bytes");
@@ -43,8 +52,11 @@ static_assert(sizeof(CloudParticle) == 16, "a cloud particle is 16 bytes");
 /// One species of a mixture: a radius sampler u -> r [um] (inversion of its PSD) and its number
 /// share (> 0; shares are normalized over the species).
 struct CloudSpecies {
+    /// Radius sampler: maps u in [0, 1) to a radius [um] (> 0, finite; checked at generation).
     std::function<double(double)> sample_radius_um;
+    /// Number share of the species (> 0, finite; normalised over the species of a cloud).
     double share = 1.0;
+    /// Optional name (reports and logs only).
     std::string name;
 };
 
@@ -59,6 +71,9 @@ template <SizeDistribution Psd>
     return {[r](double) { return r; }, share, std::move(name)};
 }
 
+/// A cloud of spherical particles grouped by species (see the file comment): 16 bytes per
+/// particle, positions and radii in scene units. Built by generate() or from_particles(), then
+/// read-only (const members are safe to call from any number of threads).
 class ParticleCloud {
 public:
     ParticleCloud() = default;
@@ -151,10 +166,15 @@ public:
         return c;
     }
 
+    /// Number of particles.
     [[nodiscard]] std::size_t size() const noexcept { return particles_.size(); }
+    /// Particle i (< size(); not checked).
     [[nodiscard]] const CloudParticle& operator[](std::size_t i) const noexcept { return particles_[i]; }
+    /// All particles, grouped by species.
     [[nodiscard]] const std::vector<CloudParticle>& particles() const noexcept { return particles_; }
+    /// Number of species (0 for a default-constructed cloud).
     [[nodiscard]] std::size_t species_count() const noexcept { return begin_.empty() ? 0 : begin_.size() - 1; }
+    /// First particle index of species s, for s in [0, species_count()] (s = species_count() gives size()).
     [[nodiscard]] std::uint32_t species_begin(std::size_t s) const noexcept { return begin_[s]; }
     /// Species of particle i (binary search over the few species ranges).
     [[nodiscard]] std::size_t species_of(std::uint32_t i) const noexcept {
@@ -165,7 +185,9 @@ public:
     /// Volume of the domain the centres fill [scene units^3] (exact for a box or sphere, else by
     /// the rejection rate).
     [[nodiscard]] double volume() const noexcept { return volume_; }
+    /// Bounding box of the domain the centres fill [scene units] (the shape's bounds, or as given).
     [[nodiscard]] const Aabb<double>& domain() const noexcept { return bounds_; }
+    /// Micrometres per scene unit (1e6: scene in metres), used to convert PSD radii.
     [[nodiscard]] double um_per_unit() const noexcept { return um_per_unit_; }
     /// Bytes held by the particle array.
     [[nodiscard]] std::size_t memory_bytes() const noexcept { return particles_.capacity() * sizeof(CloudParticle); }

@@ -53,9 +53,12 @@ struct MsTableOptions {
     int n_phi = 8;              ///< azimuth bins over [0, pi] (paper: 36 over [0, 2 pi])
     double rho_max = 8.0;       ///< radial extent (mean free paths)
     double z_min = -8.0;        ///< axial extent (mean free paths)
+    /// Upper axial extent (mean free paths; > z_min).
     double z_max = 8.0;
     std::uint64_t photons = 200000;  ///< source particles
     double escape_radius = 24.0;     ///< particles beyond this distance (mfp) are dropped
+    /// Seed of the walks: source particle i draws from Rng::from_key(seed, stream, i), so a seed gives the
+    /// same table on any thread count.
     std::uint64_t seed = 1;
     int blocks = 16;            ///< fixed number of tally blocks (deterministic for any thread count)
 };

@@ -73,7 +73,9 @@ struct ShellSamples {
           fa_counts(std::size_t(fa_bins) + 1, 0), fa_d_max(d_max) {}
     ShellSamples() = default;
 
+    /// Number of shells (radii.size()).
     [[nodiscard]] std::size_t n_shells() const noexcept { return radii.size(); }
+    /// Number of scattered exits recorded for shell i (coords[i].size() / 3; i < n_shells(), not checked).
     [[nodiscard]] std::uint64_t n_scattered(std::size_t i) const noexcept { return coords[i].size() / 3; }
 
     /// Append another set of tallies over the same radii (fixed order => deterministic).
@@ -93,6 +95,8 @@ struct ShellSamples {
 /// path ended inside some shells) or let `done()` become true (every shell exited).
 class ShellRecorder {
 public:
+    /// Recorder appending to `out` (referenced: it must outlive the recorder). Not thread-safe:
+    /// one recorder and one ShellSamples per thread (or block), merged afterwards.
     explicit ShellRecorder(ShellSamples& out) noexcept : out_(out) {}
 
     /// Start a path at x with unit direction omega.
@@ -147,6 +151,7 @@ public:
         next_ = out_.n_shells();
     }
 
+    /// True once every shell has been exited and the first free path has ended.
     [[nodiscard]] bool done() const noexcept { return next_ >= out_.n_shells() && !fa_open_; }
 
 private:
@@ -173,8 +178,12 @@ private:
 template <Medium M>
 class ContinuousShellSource {
 public:
+    /// Source of paths in `medium` (referenced, not copied: it must outlive the source), each cut
+    /// after max_depth events (the shells not yet exited then count as absorbed).
     explicit ContinuousShellSource(const M& medium, int max_depth = 100000) : m_(medium), max_depth_(max_depth) {}
 
+    /// One path from the origin along +z through the walk kernel; its straight segments go to `rec`
+    /// in order (begin, segment, and absorbed if it ended before every shell was exited).
     void trace(Rng& rng, ShellRecorder& rec) const noexcept {
         using F = typename M::Float;
         using S = typename M::Spectrum;
@@ -209,6 +218,12 @@ private:
 /// \param burn_in mean burn-in path length before the start frame (length units; > 0)
 class SpherePackingShellSource {
 public:
+    /// Source over the periodic packing `tile` (>= 1 sphere; referenced, not copied: it must outlive
+    /// the source) with the parameters above;
+    /// `max_events` caps the interface events of the burn-in and, again, of the recorded path (a
+    /// path over the cap counts as absorbed). Throws
+    /// grainlight::invalid_argument naming the parameter for a non-finite or out-of-range eta,
+    /// sigma_a or burn_in, or an empty tile.
     SpherePackingShellSource(const PeriodicTile& tile, double eta, double sigma_a, double burn_in,
                              int max_events = 1000000)
         : tile_(tile), eta_(eta), sigma_a_(sigma_a), burn_in_(burn_in), max_events_(max_events) {
@@ -611,6 +626,7 @@ struct ShellBuildOptions {
     int n_v = 16;            ///< cells in omega'_v
     int k_nn = 32;           ///< neighbours of the k-NN estimate
     int rank = 4;            ///< NMF terms (paper: 4-6)
+    /// Multiplicative-update iterations of the NMF.
     int nmf_iterations = 400;
     std::uint64_t seed = 1;  ///< NMF start
     /// true: cell-averaged sample-point k-NN (knn_cell_density_grid, conserves mass);
@@ -626,6 +642,7 @@ struct ShellBuildOptions {
 
 /// A built table and what it cost in accuracy.
 struct ShellBuildResult {
+    /// The built shell table (validated).
     ShellTable table;
     Eigen::MatrixXd density;               ///< k-NN density V: rows (shell, cos cell), cols (u, v) cells; per path, per (cos, u, v) volume
     std::vector<double> knn_integral;      ///< per shell: integral of the raw k-NN density (should be p_scattered)

@@ -33,9 +33,12 @@
 
 namespace grainlight {
 
+/// Settings of a ParticleGrid: resolution (explicit or automatic), dilation (the largest query
+/// radius) and a cell cap. Validated by the ParticleGrid constructor.
 struct ParticleGridSettings {
     /// Voxels per axis; all zero: automatic, `particles_per_voxel` on average.
     std::array<int, 3> resolution{0, 0, 0};
+    /// Target mean number of particles per voxel of an automatic resolution (> 0; Guo21: about 1).
     double particles_per_voxel = 1.0;
     /// Largest query radius r_c that will be used [scene units]; particles are registered with
     /// their spheres dilated by it.
@@ -44,10 +47,16 @@ struct ParticleGridSettings {
     std::uint64_t max_cells = std::uint64_t(1) << 28;
 };
 
+/// Uniform voxel grid over a ParticleCloud with CSR lists of particle references (see the file
+/// comment). Keeps a pointer to the cloud, which must outlive the grid. Read-only after
+/// construction: queries are const, allocate nothing and may run on any number of threads.
 class ParticleGrid {
 public:
     ParticleGrid() = default;
 
+    /// Grid over `cloud` (>= 1 particle; referenced, not copied) with settings `st`; throws
+    /// grainlight::invalid_argument naming the setting for a negative or non-finite dilation,
+    /// particles_per_voxel <= 0, an explicit resolution outside [1, 65536] or >= 2^32 cells.
     ParticleGrid(const ParticleCloud& cloud, const ParticleGridSettings& st) : cloud_(&cloud) {
         const char* who = "ParticleGrid";
         check_argument(cloud.size() >= 1, who, "cloud.size()", cloud.size(), ">= 1");
@@ -124,11 +133,17 @@ public:
             for_cells(cloud[i], [&](std::uint32_t c) { refs_[fill[c]++] = i; });
     }
 
+    /// The cloud the grid references.
     [[nodiscard]] const ParticleCloud& cloud() const noexcept { return *cloud_; }
+    /// Voxels per axis (x, y, z).
     [[nodiscard]] const std::array<int, 3>& resolution() const noexcept { return res_; }
+    /// Dilation of the registered spheres (the largest usable query radius) [scene units].
     [[nodiscard]] float dilation() const noexcept { return dilation_; }
+    /// Number of voxels.
     [[nodiscard]] std::size_t cell_count() const noexcept { return start_.empty() ? 0 : start_.size() - 1; }
+    /// Number of particle references over all voxels (>= the particle count).
     [[nodiscard]] std::size_t reference_count() const noexcept { return refs_.size(); }
+    /// Memory held by the cell offsets and references, in bytes (the cloud not included).
     [[nodiscard]] std::size_t memory_bytes() const noexcept {
         return (start_.capacity() + refs_.capacity()) * sizeof(std::uint32_t);
     }
@@ -136,6 +151,7 @@ public:
     [[nodiscard]] std::span<const std::uint32_t> cell(std::uint32_t c) const noexcept {
         return {refs_.data() + start_[c], refs_.data() + start_[c + 1]};
     }
+    /// Flat index of voxel (x, y, z) (each in [0, resolution()[a]); not checked), x fastest.
     [[nodiscard]] std::uint32_t cell_index(int x, int y, int z) const noexcept {
         return std::uint32_t((std::uint64_t(z) * std::uint64_t(res_[1]) + std::uint64_t(y)) * std::uint64_t(res_[0]) +
                              std::uint64_t(x));
