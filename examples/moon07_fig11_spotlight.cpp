@@ -141,7 +141,7 @@ int main(int argc, char** argv) {
         build_seconds = cpu_seconds() - b0;
         const double raw_bytes = double(table.n_shells()) * bo.n_c * bo.n_u * bo.n_v * sizeof(float);
         const double factored_bytes = double(table.W.size() + table.H.size() + table.fa.size()) * sizeof(float);
-        std::cerr << "moon07_fig9: shell table " << (cached ? "loaded" : "built") << " (" << build_seconds
+        std::cerr << "moon07_fig11: shell table " << (cached ? "loaded" : "built") << " (" << build_seconds
                   << " CPU s), " << table.n_shells() << " radii " << radii.front() << ".." << radii.back()
                   << " R, raw " << raw_bytes / 1024 << " KiB -> factored " << factored_bytes / 1024 << " KiB\n";
 
