@@ -3,6 +3,10 @@
 // (optionally emitting only inside a cone: a spotlight with a finite, hittable emitter, so that
 // path tracing through specular spheres can reach it), a blocker, one camera path for path
 // tracing / low order / high order (switch rule + ShellTracer), batch renders and image output.
+// The scene is generic over its volume (VolumeScene<Vol>): a cube (gl::BoxDistance, CubeScene) or
+// the bowl of moon07_fig12_bowl (BowlVolume: the lower half of a ball, flat top), optionally on a
+// diffuse table instead of the black floor. Batch renders checkpoint (--checkpoint / --resume)
+// through RenderCheckpoints.
 #pragma once
 #include <time.h>
 
@@ -10,18 +14,22 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cctype>
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "common/checkpoint.hpp"
 #include "common/cli.hpp"
 #include "common/output.hpp"
 #include "common/progress.hpp"
 #include "grainlight/core/rng.hpp"
 #include "grainlight/core/statistics.hpp"
+#include "grainlight/core/warp.hpp"
 #include "grainlight/geometry/aabb.hpp"
 #include "grainlight/geometry/distance.hpp"
 #include "grainlight/integrators/render.hpp"
@@ -53,40 +61,105 @@ double cpu_seconds() {
 
 enum class Mode { pt, low, high };
 
-/// The Fig. 9 scene: explicit spheres in the cube, light, blocker, black floor.
-struct CubeScene {
+/// Entry distance of a ray into a box volume (inf if it misses).
+inline double volume_entry(const gl::BoxDistance& v, const gl::Ray<double>& r) noexcept {
+    const gl::Aabb<double> b(v.lo, v.hi);
+    const Vec3d inv(1 / r.d.x, 1 / r.d.y, 1 / r.d.z);
+    double te = 0;
+    if (!gl::intersect_aabb(b, r.o, inv, 1e-9, std::numeric_limits<double>::infinity(), &te))
+        return std::numeric_limits<double>::infinity();
+    return te;
+}
+
+/// Outward normal of the box face nearest to p.
+inline Vec3d volume_normal(const gl::BoxDistance& v, const Vec3d& p) noexcept {
+    int best = 0;
+    double dmin = std::numeric_limits<double>::infinity(), sgn = 1;
+    for (int a = 0; a < 3; ++a) {
+        if (p[a] - v.lo[a] < dmin) { dmin = p[a] - v.lo[a]; best = a; sgn = -1; }
+        if (v.hi[a] - p[a] < dmin) { dmin = v.hi[a] - p[a]; best = a; sgn = 1; }
+    }
+    Vec3d n(0.0);
+    n[best] = sgn;
+    return n;
+}
+
+/// The bowl of moon07_fig12_bowl: the lower half of a ball (centre c, radius rb), i.e. the points
+/// with |p - c| <= rb and p.z <= c.z (a hemispherical bowl filled to its rim, flat top face).
+/// Meets the ShellTracer `Volume` requirements: signed distance (> 0 inside; exact inside, as the
+/// nearest point of the sphere of a point below the rim lies below the rim) and exit distance.
+struct BowlVolume {
+    Vec3d c{0.0};   ///< centre of the ball (the centre of the flat top face)
+    double rb = 1;  ///< radius of the ball
+
+    /// Signed distance to the boundary (> 0 inside, a lower bound of |distance| outside).
+    [[nodiscard]] double operator()(const Vec3d& p) const noexcept {
+        return std::min(rb - glm::length(p - c), c.z - p.z);
+    }
+    /// Distance along unit d from p (inside) to the boundary.
+    [[nodiscard]] double exit_distance(const Vec3d& p, const Vec3d& d) const noexcept {
+        const Vec3d rel = p - c;
+        const double b = glm::dot(rel, d), cc = glm::dot(rel, rel) - rb * rb;
+        double t = std::max(0.0, -b + std::sqrt(std::max(0.0, b * b - cc)));
+        if (d.z > 0) t = std::min(t, std::max(0.0, (c.z - p.z) / d.z));
+        return t;
+    }
+    /// Entry distance of a ray from outside (inf if it misses).
+    [[nodiscard]] double entry(const gl::Ray<double>& r) const noexcept {
+        constexpr double inf = std::numeric_limits<double>::infinity();
+        const Vec3d rel = r.o - c;
+        const double b = glm::dot(rel, r.d), cc = glm::dot(rel, rel) - rb * rb, disc = b * b - cc;
+        if (disc < 0) return inf;
+        const double sq = std::sqrt(disc);
+        double t0 = -b - sq, t1 = -b + sq;  // inside the ball
+        // Half-space z <= c.z.
+        if (r.d.z > 0) t1 = std::min(t1, (c.z - r.o.z) / r.d.z);
+        else if (r.d.z < 0) t0 = std::max(t0, (c.z - r.o.z) / r.d.z);
+        else if (r.o.z > c.z) return inf;
+        if (t0 > t1 || t1 < 1e-9) return inf;
+        return std::max(t0, 0.0);
+    }
+};
+/// Entry distance of a ray into the bowl (inf if it misses).
+inline double volume_entry(const BowlVolume& v, const gl::Ray<double>& r) noexcept { return v.entry(r); }
+/// Outward normal of the bowl's boundary part nearest to p (on the boundary).
+inline Vec3d volume_normal(const BowlVolume& v, const Vec3d& p) noexcept {
+    // On the boundary: the flat top where p.z is at the rim height, else the sphere.
+    if (std::abs(v.c.z - p.z) <= std::abs(v.rb - glm::length(p - v.c))) return Vec3d(0, 0, 1);
+    return glm::normalize(p - v.c);
+}
+
+/// The Fig. 9 scene (and Fig. 11, Fig. 12): explicit spheres in a volume (a cube or a bowl), light,
+/// blocker, a black floor or a diffuse table at z = 0.
+template <class Vol>
+struct VolumeScene {
     double L = 1, eta = 1.5;
-    gl::PeriodicTile tile;  ///< the cube's spheres in a padded tile (images never reach the cube)
-    gl::BoxDistance cube;
+    gl::PeriodicTile tile;  ///< the volume's spheres in a padded tile (images never reach the volume)
+    Vol cube;               ///< the volume (named for the cube scenes; the bowl in Fig. 12)
     gl::Light<double, S1> light;
     gl::QuadShape<double> blocker;
     int max_events = 100000;
-    bool cut = false;  ///< spheres cut by the cube faces (flat glass faces there) instead of whole ones
+    bool cut = false;  ///< spheres cut by the volume's faces (glass faces there) instead of whole ones
     double spot_cos = -2;  ///< the light emits only within acos(spot_cos) of its normal (spotlight; -2: everywhere)
+    double floor_albedo = 0;  ///< Lambertian albedo of the floor z = 0 (0: black, the cube scenes)
+    int max_floor_bounces = 8;  ///< paths end after this many floor bounces
 
-    /// Outward normal of the cube face nearest to p.
-    [[nodiscard]] Vec3d face_normal(const Vec3d& p) const noexcept {
-        int best = 0;
-        double dmin = std::numeric_limits<double>::infinity(), sgn = 1;
-        for (int a = 0; a < 3; ++a) {
-            if (p[a] - cube.lo[a] < dmin) { dmin = p[a] - cube.lo[a]; best = a; sgn = -1; }
-            if (cube.hi[a] - p[a] < dmin) { dmin = cube.hi[a] - p[a]; best = a; sgn = 1; }
-        }
-        Vec3d n(0.0);
-        n[best] = sgn;
-        return n;
-    }
+    /// Outward normal of the volume's boundary nearest to p.
+    [[nodiscard]] Vec3d face_normal(const Vec3d& p) const noexcept { return volume_normal(cube, p); }
     double clock_mean = 2.0;  ///< mean path length between switch candidates (R)
     bool hand_back = false;   ///< high order: shells only where they fit, explicit tracing near the faces
 
     // --- the scene outside the medium (also the Env of the shell tracer) ---
     /// Radiance along a ray outside the cube: the light's front side, else black (blocker,
     /// floor z = 0, background). `t_cube`: the distance to the cube (inf: ignore it).
-    [[nodiscard]] double outside(const gl::Ray<double>& r, double t_cube, bool& enters) const noexcept {
+    /// `floor_t`: set to the distance to the floor when the floor is what the ray hits (else inf).
+    [[nodiscard]] double outside(const gl::Ray<double>& r, double t_cube, bool& enters,
+                                 double* floor_t = nullptr) const noexcept {
         enters = false;
+        if (floor_t) *floor_t = std::numeric_limits<double>::infinity();
         if (r.o.z < 0) return 0.0;  // below the floor: absorbed
         double t_best = t_cube;
-        int what = 0;  // 0 none/cube, 1 light, 2 blocker/floor
+        int what = 0;  // 0 none/cube, 1 light, 2 blocker, 3 floor
         double t;
         Vec3d n;
         if (light.quad.intersect(r, t, n) && t < t_best && glm::dot(r.d, n) < 0 && -glm::dot(r.d, n) >= spot_cos) {
@@ -101,10 +174,11 @@ struct CubeScene {
             const double tf = -r.o.z / r.d.z;
             if (tf < t_best) {
                 t_best = tf;
-                what = 2;
+                what = 3;
             }
         }
         if (what == 1) return light.power[0];
+        if (what == 3 && floor_t) *floor_t = t_best;
         if (what == 0 && std::isfinite(t_cube)) enters = true;
         return 0.0;
     }
@@ -123,15 +197,8 @@ struct CubeScene {
         return S1(outside(r, std::numeric_limits<double>::infinity(), enters));
     }
 
-    /// Entry distance of the ray into the cube (inf if it misses).
-    [[nodiscard]] double cube_entry(const gl::Ray<double>& r) const noexcept {
-        const gl::Aabb<double> b(cube.lo, cube.hi);
-        const Vec3d inv(1 / r.d.x, 1 / r.d.y, 1 / r.d.z);
-        double te = 0;
-        if (!gl::intersect_aabb(b, r.o, inv, 1e-9, std::numeric_limits<double>::infinity(), &te))
-            return std::numeric_limits<double>::infinity();
-        return te;
-    }
+    /// Entry distance of the ray into the volume (inf if it misses).
+    [[nodiscard]] double cube_entry(const gl::Ray<double>& r) const noexcept { return volume_entry(cube, r); }
 
     /// One camera path. PT: explicit to the end. Low: explicit, stopped (0) when the switch rule
     /// fires. High: 0 unless the switch rule fires, then the shell tracer's radiance.
@@ -146,12 +213,23 @@ struct CubeScene {
         bool handed = false;  // high order, hand-back mode: the path came back from the shells
         double beta = 1;      // throughput factor from the shells (hand-back mode)
         const double R = tile.radius();
+        int floor_bounces = 0;
         for (int guard = 0; guard < max_events; ++guard) {
             if (!in_cube) {
                 const gl::Ray<double> ray(p, d);
                 const double tc = cube_entry(ray);
                 bool enters = false;
-                const double Le = outside(ray, tc, enters);
+                double tf = std::numeric_limits<double>::infinity();
+                const double Le = outside(ray, tc, enters, &tf);
+                if (floor_albedo > 0 && std::isfinite(tf) && floor_bounces < max_floor_bounces) {
+                    // Diffuse table: a cosine-weighted bounce (weight = albedo), in every mode.
+                    ++floor_bounces;
+                    p = ray(tf);
+                    p.z = 1e-9 * R;
+                    d = gl::sample_cosine_hemisphere(gl::Vec2d(rng.uniform<double>(), rng.uniform<double>()));
+                    beta *= floor_albedo;
+                    continue;
+                }
                 if (!enters) {
                     if (events_out) *events_out += std::uint64_t(events);
                     return mode == Mode::high && !handed ? 0.0 : beta * Le;
@@ -241,7 +319,7 @@ struct CubeScene {
                     if (tracer->may_switch(x, events)) {
                         if (events_out && !hand_back) *events_out += std::uint64_t(events);
                         if (mode == Mode::low) return 0.0;
-                        if (!hand_back) return tracer->trace(x, d, rng, *this, ts)[0];
+                        if (!hand_back) return beta * tracer->trace(x, d, rng, *this, ts)[0];
                         // Hand-back mode: shells where they fit, then explicit tracing again from
                         // the hand-back point in the scene's own spheres (glass if it lies in one).
                         const gl::ShellHandBack<S1> hb = tracer->trace_to_boundary(x, d, rng, ts);
@@ -291,6 +369,41 @@ struct CubeScene {
     }
 };
 
+/// The Moon07 cube scene (moon07_fig9_cube_shadow, moon07_fig11_spotlight).
+using CubeScene = VolumeScene<gl::BoxDistance>;
+
+/// One checkpoint per render_image call of an example (--checkpoint SECONDS / --resume): the file
+/// DIR/<example>.<stem>.checkpoint with a file-name-safe stem per render, kept when its render
+/// finishes (a resumed run skips the renders already done) and all removed by remove_all() at the
+/// end of a completed run. A resumed run's timings count only the rows it rendered itself.
+struct RenderCheckpoints {
+    const gl_examples::Cli* cli = nullptr;
+    std::filesystem::path out;
+    std::string example;
+    std::vector<std::filesystem::path> files;
+
+    /// The checkpoint options of the render labelled `label` (disabled without the options).
+    gl::CheckpointOptions operator()(const std::string& label) {
+        std::string stem = label;
+        for (char& ch : stem)
+            if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '.') ch = '_';
+        auto c = gl_examples::checkpoint_from_cli(*cli, out / (example + "." + stem + ".checkpoint"));
+        if (!c.path.empty()) {
+            c.key ^= std::hash<std::string>{}(stem);
+            c.remove_when_done = false;
+            files.push_back(c.path);
+        }
+        return c;
+    }
+    /// The run is complete: remove its checkpoints.
+    void remove_all() const {
+        for (const auto& p : files) {
+            std::error_code ec;
+            std::filesystem::remove(p, ec);
+        }
+    }
+};
+
 /// Per-pixel batch statistics of B renders.
 struct BatchImages {
     int W = 0, H = 0, B = 0;
@@ -312,7 +425,7 @@ struct BatchImages {
 
 template <class Fn>
 BatchImages render_batches(const gl::PinholeCamera<double>& cam, int spp, int B, std::uint64_t seed, int threads,
-                           const std::string& label, Fn&& fn) {
+                           const std::string& label, Fn&& fn, RenderCheckpoints* checkpoints = nullptr) {
     BatchImages out;
     out.W = cam.width();
     out.H = cam.height();
@@ -324,6 +437,7 @@ BatchImages render_batches(const gl::PinholeCamera<double>& cam, int spp, int B,
         ro.spp = spp;
         ro.seed = seed * 1000003u + std::uint64_t(b);
         ro.threads = threads;
+        if (checkpoints) ro.checkpoint = (*checkpoints)(label + ".b" + std::to_string(b));
         const gl::Film film = gl::render_image(
             cam, [&](const gl::Ray<double>& r, gl::Rng& rng) { return S1(fn(r, rng)); }, ro,
             [&](int n) { bar.advance(std::uint64_t(n)); });

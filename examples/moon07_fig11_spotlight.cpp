@@ -46,6 +46,7 @@ int main(int argc, char** argv) {
             .option("no-nee", "high order without Fig. 6's shadow rays (count escapes that hit the light)")
             .option("exit-rule", "exits outside the cube: radial (Moon07: along y - x) or table (along the sampled T_r direction)", "table")
             .option("hand-back", "high order: shells only where they fit, explicit tracing within r_0 of the faces (no exit rule, no shadow rays)")
+            .checkpoint_options()
             .common_options("out/moon07_fig11_spotlight");
         cli.finish();
         const bool full = cli.full_quality();
@@ -140,7 +141,7 @@ int main(int argc, char** argv) {
         build_seconds = cpu_seconds() - b0;
         const double raw_bytes = double(table.n_shells()) * bo.n_c * bo.n_u * bo.n_v * sizeof(float);
         const double factored_bytes = double(table.W.size() + table.H.size() + table.fa.size()) * sizeof(float);
-        std::cerr << "moon07_fig9: shell table " << (cached ? "loaded" : "built") << " (" << build_seconds
+        std::cerr << "moon07_fig11: shell table " << (cached ? "loaded" : "built") << " (" << build_seconds
                   << " CPU s), " << table.n_shells() << " radii " << radii.front() << ".." << radii.back()
                   << " R, raw " << raw_bytes / 1024 << " KiB -> factored " << factored_bytes / 1024 << " KiB\n";
 
@@ -187,16 +188,19 @@ int main(int argc, char** argv) {
             }
         if (n_spot < 4) throw std::runtime_error("the camera sees fewer than 4 pixels of the spot");
 
-        // --- renders ---
+        // --- renders (--checkpoint SECONDS / --resume: one checkpoint per batch render, kept when it
+        // finishes so a resumed run skips it, all removed at the end of a completed run; the shell
+        // passes' step tallies count only the rows rendered by the resumed run) ---
+        RenderCheckpoints checkpoints{&cli, out, "moon07_fig11_spotlight", {}};
         const gl::ShellTracer<S1, gl::BoxDistance>* none = nullptr;
         const BatchImages pt = render_batches(cam, spp_pt, B, seed, threads, "fig11 path tracing",
                                               [&](const gl::Ray<double>& r, gl::Rng& rng) {
                                                   return scene.radiance(r, rng, Mode::pt, none);
-                                              });
+                                              }, &checkpoints);
         const BatchImages lo = render_batches(cam, spp_low, B, seed + 1, threads, "fig11 low order",
                                               [&](const gl::Ray<double>& r, gl::Rng& rng) {
                                                   return scene.radiance(r, rng, Mode::low, &tracer);
-                                              });
+                                              }, &checkpoints);
         // Per-thread tallies of the shell-traced parts (summed after the render).
         std::vector<gl::ShellTraceStats> tstats(256);
         const BatchImages hi = render_batches(cam, spp_high, B, seed + 2, threads, "fig11 high order (shells)",
@@ -208,7 +212,7 @@ int main(int argc, char** argv) {
 #endif
                                                   return scene.radiance(r, rng, Mode::high, &tracer, nullptr,
                                                                         &tstats[std::size_t(tid)]);
-                                              });
+                                              }, &checkpoints);
         gl::ShellTraceStats ts;
         for (const auto& t : tstats) {
             ts.paths += t.paths;
@@ -344,6 +348,7 @@ int main(int argc, char** argv) {
             .num("shell_raw_bytes", raw_bytes)
             .num("shell_factored_bytes", factored_bytes)
             .num("wall_seconds", wall);
+        checkpoints.remove_all();  // the run is complete
         std::cout << j.str() << std::endl;
         return 0;
     });

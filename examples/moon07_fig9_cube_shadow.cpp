@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
             .option("no-nee", "high order without Fig. 6's shadow rays (count escapes that hit the light)")
             .option("exit-rule", "exits outside the cube: radial (Moon07: along y - x) or table (along the sampled T_r direction)", "table")
             .option("hand-back", "high order: shells only where they fit, explicit tracing within r_0 of the faces (no exit rule, no shadow rays)")
+            .checkpoint_options()
             .common_options("out/moon07_fig9_cube_shadow");
         cli.finish();
         const bool full = cli.full_quality();
@@ -176,16 +177,19 @@ int main(int argc, char** argv) {
             }
         if (n_mask < 16) throw std::runtime_error("the camera sees fewer than 16 cube pixels");
 
-        // --- renders ---
+        // --- renders (--checkpoint SECONDS / --resume: one checkpoint per batch render, kept when it
+        // finishes so a resumed run skips it, all removed at the end of a completed run; the shell
+        // passes' step tallies count only the rows rendered by the resumed run) ---
+        RenderCheckpoints checkpoints{&cli, out, "moon07_fig9_cube_shadow", {}};
         const gl::ShellTracer<S1, gl::BoxDistance>* none = nullptr;
         const BatchImages pt = render_batches(cam, spp_pt, B, seed, threads, "fig9 path tracing",
                                               [&](const gl::Ray<double>& r, gl::Rng& rng) {
                                                   return scene.radiance(r, rng, Mode::pt, none);
-                                              });
+                                              }, &checkpoints);
         const BatchImages lo = render_batches(cam, spp_low, B, seed + 1, threads, "fig9 low order",
                                               [&](const gl::Ray<double>& r, gl::Rng& rng) {
                                                   return scene.radiance(r, rng, Mode::low, &tracer);
-                                              });
+                                              }, &checkpoints);
         // Per-thread tallies of the shell-traced parts (summed after the render).
         std::vector<gl::ShellTraceStats> tstats(256);
         const BatchImages hi = render_batches(cam, spp_high, B, seed + 2, threads, "fig9 high order (shells)",
@@ -197,7 +201,7 @@ int main(int argc, char** argv) {
 #endif
                                                   return scene.radiance(r, rng, Mode::high, &tracer, nullptr,
                                                                         &tstats[std::size_t(tid)]);
-                                              });
+                                              }, &checkpoints);
         gl::ShellTraceStats ts;
         for (const auto& t : tstats) {
             ts.paths += t.paths;
@@ -315,6 +319,7 @@ int main(int argc, char** argv) {
             .num("shell_raw_bytes", raw_bytes)
             .num("shell_factored_bytes", factored_bytes)
             .num("wall_seconds", wall);
+        checkpoints.remove_all();  // the run is complete
         std::cout << j.str() << std::endl;
         return 0;
     });
