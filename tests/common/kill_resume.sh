@@ -10,11 +10,12 @@ shift 3
 rm -rf "$dir"
 mkdir -p "$dir"
 "$exe" "$@" --out "$dir/ref" >/dev/null 2>&1
+mkdir -p "$dir/kill"  # exists before the polling below looks into it
 "$exe" "$@" --out "$dir/kill" --checkpoint 0 >/dev/null 2>&1 &
 pid=$!
 # Wait for a few checkpoints (at least one finished render and one in flight when possible).
 for _ in $(seq 1 1000); do
-  n=$(find "$dir/kill" -name '*.checkpoint' 2>/dev/null | wc -l)
+  n=$(find "$dir/kill" -name '*.checkpoint' 2>/dev/null | wc -l || true)
   [ "$n" -ge 3 ] && break
   kill -0 "$pid" 2>/dev/null || break
   sleep 0.01
