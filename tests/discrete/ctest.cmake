@@ -70,14 +70,15 @@ endif()
 
 if(TARGET guo21_fig18_absorption)
   # Guo21 Fig. 18 / Sec. 6.6: eta = 1.5 + i eta_i; the single-scattering albedo and the discrete
-  # medium's mean radiance fall with eta_i, and each discrete render has its continuous pair's
-  # brightness (same particles: sum C_t / V, albedo, ensemble phase) within 6 % (measured +1.7..+2.7 %,
-  # the membership rule's extinction factor 1.04 at r_c = 20 um).
+  # medium's mean radiance fall with eta_i; each discrete render has its continuous pair's brightness
+  # (same particles: sum C_t / V, albedo, ensemble phase) within 8 % (measured +1.7..+4.1 %: the
+  # membership rule's extinction factor 1.04 at r_c = 20 um), and that of the pair with each C_t
+  # scaled by the factor (the rule's Poisson average) within 5 % (measured <= 1.9 %, seeds 1, 2).
   set(_g18out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig18_out)
   add_test(NAME guo21_fig18_absorption_json
            COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:guo21_fig18_absorption>
                    "-DARGS=--quality;quick;--threads;2;--out;${_g18out}"
-                   "-DCHECKS=albedo_falls == 1;mean_discrete_falls == 1;max_abs_rel_diff <= 0.06;mean_discrete_last_over_first < 0.5;count == 300000"
+                   "-DCHECKS=albedo_falls == 1;mean_discrete_falls == 1;max_abs_rel_diff <= 0.08;max_abs_rel_diff_membership <= 0.05;mean_discrete_last_over_first < 0.5;count == 300000"
                    -DEXPECT_FILE=${_g18out}/guo21_fig18_absorption.csv
                    -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
   add_test(NAME guo21_fig18_absorption_bad_eta COMMAND $<TARGET_FILE:guo21_fig18_absorption> --eta-i 0,-1e-4 --out ${_g18out})
