@@ -102,3 +102,18 @@ if(TARGET guo21_fig19_psd)
   set_tests_properties(guo21_fig19_psd_bad_k PROPERTIES PASS_REGULAR_EXPRESSION "--k")
   set_tests_properties(guo21_fig19_psd_json guo21_fig19_psd_bad_k PROPERTIES LABELS "example;discrete")
 endif()
+
+if(TARGET guo21_table1)
+  # Guo21 Table 1 / Sec. 6.8: time and memory per (stand-in) scene, ours vs EPT at equal spp. Timings
+  # are reported, never asserted; memory: cloud + grid below 64 bytes per particle (measured ~25).
+  set(_gt1out ${CMAKE_CURRENT_BINARY_DIR}/guo21_table1_out)
+  add_test(NAME guo21_table1_json
+           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:guo21_table1>
+                   "-DARGS=--quality;quick;--threads;2;--out;${_gt1out}"
+                   "-DCHECKS=bytes_per_particle_max < 64"
+                   -DEXPECT_FILE=${_gt1out}/guo21_table1.csv
+                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
+  add_test(NAME guo21_table1_bad_spp COMMAND $<TARGET_FILE:guo21_table1> --spp 0 --out ${_gt1out})
+  set_tests_properties(guo21_table1_bad_spp PROPERTIES PASS_REGULAR_EXPRESSION "spp")
+  set_tests_properties(guo21_table1_json guo21_table1_bad_spp PROPERTIES LABELS "example;discrete")
+endif()
