@@ -68,8 +68,8 @@ int main(int argc, char** argv) {
     return run(argc, argv, "meng15_fig13_snowman",
                "Meng15 Fig. 13: 1 m and 10 cm snowman, EPT | EPT+VPT | EPT+VPT+DA at equal CPU time", [&](Example& ex) {
         const int width = ex.opt<int>("width", 48, 512, "image width (height = 3/4 width)");
-        const double size = ex.opt<double>("size", 80.0, 120.0, "1 m snowman height in grain radii (10 cm: size / 10)");
-        const double budget_arg = ex.opt<double>("budget", 4.0, 300.0, "CPU seconds per technique and scale");
+        const double size = ex.opt<double>("size", 80.0, 100.0, "1 m snowman height in grain radii (10 cm: size / 10)");
+        const double budget_arg = ex.opt<double>("budget", 6.0, 250.0, "CPU seconds per technique and scale");
         const double absorption = ex.opt<double>("absorption", 1e-3, 3e-4, "grain interior absorption per grain radius (green)");
         const int stride = ex.opt<int>("preview-stride", 4, 8, "cost preview: every k-th pixel in x and y");
         const int level = ex.opt<int>("grain-level", 3, 4, "icosphere level of the snow grain mesh");
