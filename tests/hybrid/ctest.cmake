@@ -47,7 +47,9 @@ endif()
 if(TARGET meng15_fig13_snowman OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/meng15_fig13_snowman.cpp))
   # Fig. 13 at quick (equal CPU time per technique): both scales have the keys as finite numbers, the
   # equal-time budgets were spent (seconds > 0) and the means of EPT, EPT+VPT and EPT+VPT+DA agree
-  # within 10 % of EPT's (measured at quick: +4.3 % / +8.0 % on the 1 m snowman, +0.5 % on the 10 cm).
+  # within 10 % of EPT's for EPT+VPT and 20 % for EPT+VPT+DA (measured at quick: +4.3 % / +8.0 % on
+  # the 1 m snowman, +0.5 % on the 10 cm; DA's own bias of 5-8 % plus EPT's ~2.5 % noise at a 6 s
+  # budget would make a 10 % bound on DA flaky; its bias is reported in docs/meng15_hybrid.md).
   # The example's JSON nests under "scales": the checker is check_scenes_json.cmake with that key.
   file(READ ${PROJECT_SOURCE_DIR}/tests/hybrid/check_scenes_json.cmake _m15_checker)
   string(REPLACE "scenes" "scales" _m15_checker "${_m15_checker}")
@@ -57,7 +59,7 @@ if(TARGET meng15_fig13_snowman OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJEC
                    "-DARGS=--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_fig13_snowman"
                    "-DSCENES=snowman_1m;snowman_10cm"
                    "-DKEYS=seconds_ept;seconds_ept_vpt;seconds_ept_vpt_da;mean_ept;mean_ept_vpt;mean_ept_vpt_da;ttuv_speedup_ept_vpt;ttuv_speedup_ept_vpt_da"
-                   "-DCHECKS=seconds_ept > 0;seconds_ept_vpt > 0;seconds_ept_vpt_da > 0;mean_ept > 0;ttuv_speedup_ept_vpt > 0;ttuv_speedup_ept_vpt_da > 0;abs(mean_ept_vpt / mean_ept - 1) < 0.1;abs(mean_ept_vpt_da / mean_ept - 1) < 0.1;abs(mean_ept_vpt_da / mean_ept_vpt - 1) < 0.1"
+                   "-DCHECKS=seconds_ept > 0;seconds_ept_vpt > 0;seconds_ept_vpt_da > 0;mean_ept > 0;ttuv_speedup_ept_vpt > 0;ttuv_speedup_ept_vpt_da > 0;abs(mean_ept_vpt / mean_ept - 1) < 0.1;abs(mean_ept_vpt_da / mean_ept - 1) < 0.2;abs(mean_ept_vpt_da / mean_ept_vpt - 1) < 0.2"
                    -P ${CMAKE_CURRENT_BINARY_DIR}/check_scales_json.cmake)
   set_tests_properties(meng15_fig13_snowman_quick PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
   add_test(NAME meng15_fig13_snowman_bad_budget COMMAND $<TARGET_FILE:meng15_fig13_snowman> --budget 0)
