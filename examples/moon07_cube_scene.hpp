@@ -423,6 +423,88 @@ struct BatchImages {
     }
 };
 
+/// Path tracing (`pt`) against low-order PT + shells (`lo` + `hi`) over the pixels of `mask`
+/// (the volume's pixels), as Figs. 9, 11 and 12 report it: means, per-pixel variances of the batch
+/// means, the bias of the shells' mean with its standard error from the batches, the shells'
+/// error against the truth (variance plus the squared bias beyond the noise of both means,
+/// measuring.md), and the equal-error and time-to-unit-variance speed-ups.
+struct ShellVsPt {
+    std::size_t NP = 0;                          ///< pixels of the image
+    double nm = 0;                               ///< pixels in the mask
+    std::vector<double> I_pt, I_lo, I_hi, I_sh;  ///< per-pixel means (I_sh = I_lo + I_hi)
+    double sum_pt = 0, sum_sh = 0, sum_lo = 0, sum_hi = 0;  ///< sums over the mask
+    double mean_pt = 0, mean_sh = 0;             ///< means over the mask
+    double var_pt = 0, var_sh = 0;               ///< mean per-pixel variance of the batch means
+    double mse_sh_pixelwise = 0;                 ///< pixel-wise MSE estimate (reference-noise dominated)
+    double se_pt = 0, se_sh = 0;                 ///< standard errors of the masked means (batches)
+    double bias2 = 0, mse_sh = 0;                ///< squared bias beyond noise; shells' MSE
+    double rmse_pt = 0, rmse_sh = 0;             ///< root of var_pt and mse_sh
+    double bias_rel = 0, bias_rel_se = 0;        ///< (mean_sh - mean_pt) / mean_pt and its error
+    double t_shells = 0, speedup = 0, ttuv_ratio = 0;  ///< CPU s of low + high; the two speed-ups
+};
+
+inline ShellVsPt compare_shells_to_pt(const BatchImages& pt, const BatchImages& lo, const BatchImages& hi,
+                                      const std::vector<char>& mask) {
+    ShellVsPt r;
+    const std::size_t NP = std::size_t(pt.W) * std::size_t(pt.H);
+    r.NP = NP;
+    r.I_pt.resize(NP);
+    r.I_lo.resize(NP);
+    r.I_hi.resize(NP);
+    r.I_sh.resize(NP);
+    double sq = 0;
+    std::size_t n_mask = 0;
+    for (std::size_t i = 0; i < NP; ++i) {
+        r.I_pt[i] = pt.mean(i);
+        r.I_lo[i] = lo.mean(i);
+        r.I_hi[i] = hi.mean(i);
+        r.I_sh[i] = r.I_lo[i] + r.I_hi[i];
+        if (!mask[i]) continue;
+        ++n_mask;
+        r.sum_pt += r.I_pt[i];
+        r.sum_sh += r.I_sh[i];
+        r.sum_lo += r.I_lo[i];
+        r.sum_hi += r.I_hi[i];
+        r.var_pt += pt.var_mean(i);
+        r.var_sh += lo.var_mean(i) + hi.var_mean(i);
+        sq += (r.I_sh[i] - r.I_pt[i]) * (r.I_sh[i] - r.I_pt[i]);
+    }
+    const double nm = double(n_mask);
+    r.nm = nm;
+    r.mean_pt = r.sum_pt / nm;
+    r.mean_sh = r.sum_sh / nm;
+    r.var_pt /= nm;
+    r.var_sh /= nm;
+    // Pixel-wise estimate (noisy: dominated by the reference's own variance at these budgets).
+    r.mse_sh_pixelwise = std::max(sq / nm - r.var_pt, r.var_sh);
+    // Bias of the mean over the masked pixels (exit rule + table), standard error from batches.
+    auto region_se = [&](const BatchImages& bi) {
+        std::vector<double> m(std::size_t(bi.B), 0.0);
+        for (int b = 0; b < bi.B; ++b)
+            for (std::size_t i = 0; i < NP; ++i)
+                if (mask[i]) m[std::size_t(b)] += bi.img[std::size_t(b)][i] / nm;
+        gl::Welford w;
+        for (double v : m) w.add(v);
+        return w.standard_error();
+    };
+    r.se_pt = region_se(pt);
+    r.se_sh = std::hypot(region_se(lo), region_se(hi));
+    // Error of the shell image against the truth: its variance plus the squared bias of the masked
+    // mean, less the part of that difference explained by the noise of both means (a bias inside
+    // the noise counts as zero; measuring.md).
+    r.bias2 = std::max(0.0, (r.mean_sh - r.mean_pt) * (r.mean_sh - r.mean_pt) - r.se_pt * r.se_pt - r.se_sh * r.se_sh);
+    r.mse_sh = r.var_sh + r.bias2;
+    r.rmse_pt = std::sqrt(r.var_pt);
+    r.rmse_sh = std::sqrt(r.mse_sh);
+    r.bias_rel = (r.mean_sh - r.mean_pt) / r.mean_pt;
+    r.bias_rel_se = std::hypot(r.se_pt, r.se_sh) / r.mean_pt;
+    r.t_shells = lo.cpu + hi.cpu;
+    r.speedup = pt.cpu * r.var_pt / r.mse_sh / r.t_shells;
+    // Variance-only (time to unit variance) ratio: the speed-up if the bias were zero.
+    r.ttuv_ratio = (pt.cpu * r.var_pt) / (r.t_shells * r.var_sh);
+    return r;
+}
+
 template <class Fn>
 BatchImages render_batches(const gl::PinholeCamera<double>& cam, int spp, int B, std::uint64_t seed, int threads,
                            const std::string& label, Fn&& fn, RenderCheckpoints* checkpoints = nullptr) {

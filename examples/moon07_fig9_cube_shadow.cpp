@@ -212,53 +212,13 @@ int main(int argc, char** argv) {
         }
         const double high_samples = double(spp_high) * B * double(n_mask);
 
-        // --- statistics over the cube pixels ---
-        const std::size_t NP = std::size_t(W) * std::size_t(H);
-        std::vector<double> I_pt(NP), I_lo(NP), I_hi(NP), I_sh(NP);
-        double sum_pt = 0, sum_sh = 0, sum_lo = 0, sum_hi = 0, var_pt = 0, var_sh = 0, sq = 0;
-        for (std::size_t i = 0; i < NP; ++i) {
-            I_pt[i] = pt.mean(i);
-            I_lo[i] = lo.mean(i);
-            I_hi[i] = hi.mean(i);
-            I_sh[i] = I_lo[i] + I_hi[i];
-            if (!mask[i]) continue;
-            sum_pt += I_pt[i];
-            sum_sh += I_sh[i];
-            sum_lo += I_lo[i];
-            sum_hi += I_hi[i];
-            var_pt += pt.var_mean(i);
-            var_sh += lo.var_mean(i) + hi.var_mean(i);
-            sq += (I_sh[i] - I_pt[i]) * (I_sh[i] - I_pt[i]);
-        }
-        const double nm = double(n_mask);
-        const double mean_pt = sum_pt / nm, mean_sh = sum_sh / nm;
-        var_pt /= nm;
-        var_sh /= nm;
-        // Pixel-wise estimate (noisy: dominated by the reference's own variance at these budgets).
-        const double mse_sh_pixelwise = std::max(sq / nm - var_pt, var_sh);
-        // Bias of the mean over the cube pixels (exit rule + table), standard error from batches.
-        auto region_se = [&](const BatchImages& bi) {
-            std::vector<double> m(std::size_t(bi.B), 0.0);
-            for (int b = 0; b < bi.B; ++b)
-                for (std::size_t i = 0; i < NP; ++i)
-                    if (mask[i]) m[std::size_t(b)] += bi.img[std::size_t(b)][i] / nm;
-            gl::Welford w;
-            for (double v : m) w.add(v);
-            return w.standard_error();
-        };
-        const double se_pt = region_se(pt), se_sh = std::hypot(region_se(lo), region_se(hi));
-        // Error of the shell image against the truth: its variance plus the squared bias of the
-        // mean over the cube, less the part of that difference explained by the noise of both
-        // means (a bias inside the noise counts as zero; measuring.md).
-        const double bias2 = std::max(0.0, (mean_sh - mean_pt) * (mean_sh - mean_pt) - se_pt * se_pt - se_sh * se_sh);
-        const double mse_sh = var_sh + bias2;
-        const double rmse_pt = std::sqrt(var_pt), rmse_sh = std::sqrt(mse_sh);
-        const double bias_rel = (mean_sh - mean_pt) / mean_pt;
-        const double bias_rel_se = std::hypot(se_pt, se_sh) / mean_pt;
-        const double t_shells = lo.cpu + hi.cpu;
-        const double speedup = pt.cpu * var_pt / mse_sh / t_shells;
-        // Variance-only (time to unit variance) ratio: the speed-up if the bias were zero.
-        const double ttuv_ratio = (pt.cpu * var_pt) / (t_shells * var_sh);
+        // --- statistics over the cube pixels (compare_shells_to_pt, moon07_cube_scene.hpp) ---
+        const ShellVsPt st = compare_shells_to_pt(pt, lo, hi, mask);
+        const double mean_pt = st.mean_pt, mean_sh = st.mean_sh, sum_lo = st.sum_lo, sum_hi = st.sum_hi,
+                     mse_sh_pixelwise = st.mse_sh_pixelwise, rmse_pt = st.rmse_pt, rmse_sh = st.rmse_sh,
+                     bias_rel = st.bias_rel, bias_rel_se = st.bias_rel_se, speedup = st.speedup,
+                     ttuv_ratio = st.ttuv_ratio, nm = st.nm;
+        const std::vector<double> &I_pt = st.I_pt, &I_lo = st.I_lo, &I_hi = st.I_hi, &I_sh = st.I_sh;
 
         // --- outputs ---
         const double scale = 0.35 / std::max(1e-12, mean_pt);
