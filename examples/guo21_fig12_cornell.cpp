@@ -258,19 +258,8 @@ int main(int argc, char** argv) {
         // --checkpoint SECONDS / --resume: one checkpoint per render (kept when it finishes, so a
         // resumed run skips the renders already done; all removed at the end). A resumed run's
         // timings count only the rows it rendered itself.
-        std::vector<std::filesystem::path> checkpoints;
-        const std::function<gl::CheckpointOptions(const std::string&)> checkpoint = [&](const std::string& label) {
-            std::string stem = label;  // a file-name-safe stem of the render's label
-            for (char& ch : stem)
-                if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '.') ch = '_';
-            auto c = gl_examples::checkpoint_from_cli(cli, out / ("guo21_fig12_cornell." + stem + ".checkpoint"));
-            if (!c.path.empty()) {
-                c.key ^= std::hash<std::string>{}(stem);
-                c.remove_when_done = false;
-                checkpoints.push_back(c.path);
-            }
-            return c;
-        };
+        gl_examples::RenderCheckpoints checkpoints{&cli, out, "guo21_fig12_cornell", {}};
+        const std::function<gl::CheckpointOptions(const std::string&)> checkpoint = std::ref(checkpoints);
 
         std::printf("Guo21 Fig. 12 (Sec. 6.1): %llu ice spheres r = %.0f um in a 1 m Cornell box, %dx%d, %d spp\n",
                     (unsigned long long)count, kRadiusUm, width, width, spp);
@@ -490,10 +479,7 @@ int main(int argc, char** argv) {
                 .num("rel_diff_discrete_spectral", sp_ours.mean_luminance / sp_ept.mean_luminance - 1)
                 .num("seconds_ept_spectral", sp_ept.seconds)
                 .num("seconds_discrete_spectral", sp_ours.seconds);
-        for (const auto& p : checkpoints) {  // the run is complete: its checkpoints are not needed
-            std::error_code ec;
-            std::filesystem::remove(p, ec);
-        }
+        checkpoints.remove_all();  // the run is complete: its checkpoints are not needed
         std::cout << j.str() << std::endl;
         return 0;
     });

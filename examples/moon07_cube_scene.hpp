@@ -372,37 +372,8 @@ struct VolumeScene {
 /// The Moon07 cube scene (moon07_fig9_cube_shadow, moon07_fig11_spotlight).
 using CubeScene = VolumeScene<gl::BoxDistance>;
 
-/// One checkpoint per render_image call of an example (--checkpoint SECONDS / --resume): the file
-/// DIR/<example>.<stem>.checkpoint with a file-name-safe stem per render, kept when its render
-/// finishes (a resumed run skips the renders already done) and all removed by remove_all() at the
-/// end of a completed run. A resumed run's timings count only the rows it rendered itself.
-struct RenderCheckpoints {
-    const gl_examples::Cli* cli = nullptr;
-    std::filesystem::path out;
-    std::string example;
-    std::vector<std::filesystem::path> files;
-
-    /// The checkpoint options of the render labelled `label` (disabled without the options).
-    gl::CheckpointOptions operator()(const std::string& label) {
-        std::string stem = label;
-        for (char& ch : stem)
-            if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '.') ch = '_';
-        auto c = gl_examples::checkpoint_from_cli(*cli, out / (example + "." + stem + ".checkpoint"));
-        if (!c.path.empty()) {
-            c.key ^= std::hash<std::string>{}(stem);
-            c.remove_when_done = false;
-            files.push_back(c.path);
-        }
-        return c;
-    }
-    /// The run is complete: remove its checkpoints.
-    void remove_all() const {
-        for (const auto& p : files) {
-            std::error_code ec;
-            std::filesystem::remove(p, ec);
-        }
-    }
-};
+// RenderCheckpoints (one checkpoint per render of an example): examples/common/checkpoint.hpp.
+using gl_examples::RenderCheckpoints;
 
 /// Per-pixel batch statistics of B renders.
 struct BatchImages {

@@ -7,11 +7,14 @@
 // (exit code 86), as a crash would; ctest uses it besides a real SIGKILL.
 #pragma once
 
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <system_error>
+#include <vector>
 
 #include "common/cli.hpp"
 #include "common/harness.hpp"
@@ -34,6 +37,38 @@ inline grainlight::CheckpointOptions checkpoint_from_cli(const Cli& cli, const s
     if (const char* n = std::getenv("GRAINLIGHT_ABORT_AFTER_CHECKPOINTS")) c.abort_after_writes = std::atoi(n);
     return c;
 }
+
+/// One checkpoint per render_image call of an example (--checkpoint SECONDS / --resume): the file
+/// DIR/<example>.<stem>.checkpoint with a file-name-safe stem per render, kept when its render
+/// finishes (a resumed run skips the renders already done) and all removed by remove_all() at the
+/// end of a completed run. A resumed run's timings count only the rows it rendered itself.
+struct RenderCheckpoints {
+    const Cli* cli = nullptr;
+    std::filesystem::path out;
+    std::string example;
+    std::vector<std::filesystem::path> files;
+
+    /// The checkpoint options of the render labelled `label` (disabled without the options).
+    grainlight::CheckpointOptions operator()(const std::string& label) {
+        std::string stem = label;
+        for (char& ch : stem)
+            if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '.') ch = '_';
+        auto c = checkpoint_from_cli(*cli, out / (example + "." + stem + ".checkpoint"));
+        if (!c.path.empty()) {
+            c.key ^= std::hash<std::string>{}(stem);
+            c.remove_when_done = false;
+            files.push_back(c.path);
+        }
+        return c;
+    }
+    /// The run is complete: remove its checkpoints.
+    void remove_all() const {
+        for (const auto& p : files) {
+            std::error_code ec;
+            std::filesystem::remove(p, ec);
+        }
+    }
+};
 
 /// The checkpoint of one render of a harness example: DIR/<example>.<stem>[.rankRofK].checkpoint
 /// in --out (disabled without --checkpoint / --resume). The file is kept when the render finishes
