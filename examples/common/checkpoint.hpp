@@ -38,10 +38,27 @@ inline grainlight::CheckpointOptions checkpoint_from_cli(const Cli& cli, const s
     return c;
 }
 
-/// One checkpoint per render_image call of an example (--checkpoint SECONDS / --resume): the file
-/// DIR/<example>.<stem>.checkpoint with a file-name-safe stem per render, kept when its render
-/// finishes (a resumed run skips the renders already done) and all removed by remove_all() at the
-/// end of a completed run. A resumed run's timings count only the rows it rendered itself.
+/// The checkpoint of one labelled render: the file DIR/<example>.<stem><tag>.checkpoint with a
+/// file-name-safe stem made from `label`, its key the run's fingerprint mixed with the stem (each
+/// render of an example has its own key), kept when its render finishes (a resumed multi-render run
+/// skips the renders already done). Disabled (empty path) without --checkpoint / --resume.
+inline grainlight::CheckpointOptions checkpoint_file(const Cli& cli, const std::filesystem::path& dir,
+                                                     const std::string& example, const std::string& label,
+                                                     const std::string& tag = "") {
+    std::string stem = label;
+    for (char& ch : stem)
+        if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '.') ch = '_';
+    auto c = checkpoint_from_cli(cli, dir / (example + "." + stem + tag + ".checkpoint"));
+    if (!c.path.empty()) {
+        c.key ^= std::hash<std::string>{}(stem);
+        c.remove_when_done = false;
+    }
+    return c;
+}
+
+/// One checkpoint per render_image call of an example that uses the Cli directly (checkpoint_file
+/// per label), all removed by remove_all() at the end of a completed run. A resumed run's timings
+/// count only the rows it rendered itself. Harness examples use checkpoint_for instead.
 struct RenderCheckpoints {
     const Cli* cli = nullptr;
     std::filesystem::path out;
@@ -50,15 +67,8 @@ struct RenderCheckpoints {
 
     /// The checkpoint options of the render labelled `label` (disabled without the options).
     grainlight::CheckpointOptions operator()(const std::string& label) {
-        std::string stem = label;
-        for (char& ch : stem)
-            if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '.') ch = '_';
-        auto c = checkpoint_from_cli(*cli, out / (example + "." + stem + ".checkpoint"));
-        if (!c.path.empty()) {
-            c.key ^= std::hash<std::string>{}(stem);
-            c.remove_when_done = false;
-            files.push_back(c.path);
-        }
+        auto c = checkpoint_file(*cli, out, example, label);
+        if (!c.path.empty()) files.push_back(c.path);
         return c;
     }
     /// The run is complete: remove its checkpoints.
@@ -76,12 +86,8 @@ struct RenderCheckpoints {
 inline grainlight::CheckpointOptions checkpoint_for(const Example& ex, const std::string& stem) {
     const std::string rank_tag =
         ex.ranks() > 1 ? ".rank" + std::to_string(ex.rank()) + "of" + std::to_string(ex.ranks()) : "";
-    auto c = checkpoint_from_cli(ex.cli(), ex.out() / (ex.name() + "." + stem + rank_tag + ".checkpoint"));
-    if (!c.path.empty()) {
-        c.key ^= std::hash<std::string>{}(stem);  // each render of the example has its own key
-        c.remove_when_done = false;
-        ex.track_checkpoint(c.path);
-    }
+    auto c = checkpoint_file(ex.cli(), ex.out(), ex.name(), stem, rank_tag);
+    if (!c.path.empty()) ex.track_checkpoint(c.path);
     return c;
 }
 

@@ -19,9 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
-#include "common/progress.hpp"
+#include "common/harness.hpp"
 #include "grainlight/adapters/embree.hpp"
 #include "grainlight/integrators/ept.hpp"
 #include "grainlight/media/continuous.hpp"
@@ -185,17 +183,16 @@ gl::RGB embree_radiance(const EmbreeWorld& w, const LibScene& lights, const Agg&
 }  // namespace
 
 int main(int argc, char** argv) {
-    return run_main("embree_aggregate", [&] {
-        Cli cli(argc, argv, "embree_aggregate",
-                "A procedural aggregate as an Embree user geometry next to Embree meshes, rendered by EPT over Embree");
-        cli.common_options("out/embree_aggregate").option("spp", "samples per pixel (default: 16 quick, 64 full)");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const auto out = cli.out_dir("out/embree_aggregate");
-        const int threads = cli.threads();
-        const std::uint64_t seed = cli.seed();
-        const std::uint64_t spp = cli.integer("spp", full ? 64 : 16);
-        if (spp < 1 || spp > 65536) throw cli_error("--spp must be in [1, 65536]");
+    return run(argc, argv, "embree_aggregate",
+               "A procedural aggregate as an Embree user geometry next to Embree meshes, rendered by EPT over Embree",
+               "out/embree_aggregate", [&](Example& ex) {
+        const auto spp = ex.opt<std::uint64_t>("spp", 16, 64, "samples per pixel");
+        ex.ready();
+        if (spp < 1 || spp > 65536) throw cli_error("--spp = " + std::to_string(spp) + " must be in [1, 65536]");
+        const bool full = ex.full();
+        const auto& out = ex.out();
+        const int threads = ex.threads();
+        const std::uint64_t seed = ex.seed();
         const int width = full ? 480 : 200, height = full ? 300 : 125;
 
         // The aggregate: a ball of radius 0.5 on the ground, grains of bounding radius 0.012 from an
@@ -206,12 +203,12 @@ int main(int argc, char** argv) {
         std::vector<gl::Vec3d> centers = packed.tile.centers();
         for (auto& c : centers) c *= scale;
         const gl::PeriodicTile tile(packed.tile.side() * scale, r_grain, std::move(centers));
-        std::vector<gl::GrainExemplar> ex;
-        ex.push_back(gl::GrainExemplar::procedural(gl::GrainShape::crystal, 0.95,
+        std::vector<gl::GrainExemplar> exemplars;
+        exemplars.push_back(gl::GrainExemplar::procedural(gl::GrainShape::crystal, 0.95,
                                                    gl::GrainMaterial::make_absorbing_dielectric(1.5, gl::RGBd{0.3, 0.5, 0.9}), 3, 3));
-        ex.push_back(gl::GrainExemplar::procedural(gl::GrainShape::snow, 1.0,
+        exemplars.push_back(gl::GrainExemplar::procedural(gl::GrainShape::snow, 1.0,
                                                    gl::GrainMaterial::make_dielectric(1.31), 7, 3));
-        const Agg agg(tile, gl::VoxelizedBoundary<Shape>(Shape(gl::Vec3d(0.2, 0.5, 0.0), 0.5), tile.side()), ex, {0.5, 0.5},
+        const Agg agg(tile, gl::VoxelizedBoundary<Shape>(Shape(gl::Vec3d(0.2, 0.5, 0.0), 0.5), tile.side()), exemplars, {0.5, 0.5},
                       seed);
 
         EmbreeWorld w;
@@ -236,7 +233,7 @@ int main(int argc, char** argv) {
         gl::Film film(width, height);
         std::vector<double> row_sum(std::size_t(height), 0.0), row_sq(std::size_t(height), 0.0);
         std::vector<std::uint64_t> row_rays(std::size_t(height), 0);
-        ProgressBar bar("embree", std::uint64_t(2 * height));
+        ProgressBar bar = ex.progress("embree", std::uint64_t(2 * height));
         const auto t0 = std::chrono::steady_clock::now();
 #if defined(_OPENMP)
         const int nt = threads > 0 ? threads : omp_get_max_threads();
@@ -290,24 +287,19 @@ int main(int argc, char** argv) {
         std::printf("  image mean (green): Embree %.5f +- %.5f vs library EPT %.5f (reference: equal within the error)\n",
                     mean, se, lib_mean);
         std::printf("wrote %s/{embree_aggregate,library_ept}.{exr,png}\n", out.c_str());
-        Json j;
-        j.str("example", "embree_aggregate")
-            .integer("width", width)
+        Json j = ex.summary();
+        j.integer("width", width)
             .integer("height", height)
             .integer("spp", (long long)spp)
             .integer("grains", (long long)agg.grain_count())
             .num("memory_mb", double(agg.memory_bytes()) / 1e6)
             .num("mean_embree", mean)
             .num("mean_embree_se", se)
-            .num("mean_library", lib_mean)
-            .integer("nonfinite_samples", (long long)(film.nonfinite_samples() + ref.low.nonfinite_samples() +
-                                                      ref.high.nonfinite_samples()))
+            .num("mean_library", lib_mean);
+        Example::nonfinite(j, film.nonfinite_samples() + ref.low.nonfinite_samples() + ref.high.nonfinite_samples())
             .num("seconds_embree", t_embree)
             .num("seconds_library", t_lib)
-            .num("rays_per_second", double(rays) / t_embree)
-            .integer("threads", threads)
-            .integer("seed", (long long)seed);
-        std::cout << j.str() << std::endl;
-        return 0;
+            .num("rays_per_second", double(rays) / t_embree);
+        return ex.finish(j);
     });
 }
