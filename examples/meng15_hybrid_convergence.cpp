@@ -21,9 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
-#include "common/progress.hpp"
+#include "common/harness.hpp"
 #include "grainlight/integrators/hybrid.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/media/teleportation.hpp"
@@ -52,42 +50,41 @@ struct Technique {
 }  // namespace
 
 int main(int argc, char** argv) {
-    return run_main("meng15_hybrid_convergence", [&] {
-        Cli cli(argc, argv, "meng15_hybrid_convergence",
-                "Meng15 Table 2: time to unit variance of EPT, EPT+VPT and EPT+VPT+DA (P_a = 1 and Eq. 8)");
-        cli.common_options("out/meng15_hybrid_convergence")
-            .option("spp", "bundles of 16 paths per pixel (>= 2; default 2 quick, 8 full)")
-            .option("radius", "radius of the sphere of grains in grain radii (default 20 quick, 40 full)")
-            .option("absorption", "interior absorption of the ice-like grains per grain radius (green)", "0.01")
-            .option("width", "image width in pixels (height = 3/4 width; default 120 quick, 240 full)")
-            .option("pa-estimator",
-                    "safe (robust moments, 1 unless the gain is resolved) | robust | paper (Eq. 8 with Eq. 6's variances) | "
-                    "moments (exact roulette variance)",
-                    "safe")
-            .option("preview-stride", "P_a preview: every k-th pixel in x and y (Meng15: 10, i.e. 1% of the pixels)", "10")
-            .option("pa", "pin P_a of the 'P_a opt' techniques to this value in (0, 1] (no preview; reproducible output)")
-            .option("exposure", "PNG exposure in stops", "0");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const auto out = cli.out_dir("out/meng15_hybrid_convergence");
-        const int threads = cli.threads();
-        const std::uint64_t seed = cli.seed();
-        const std::uint64_t spp = cli.integer("spp", full ? 8 : 2);
-        if (spp < 2 || spp > 4096) throw cli_error("--spp must be in [2, 4096] (ttuv needs a sample variance)");
-        const double Rb = cli.num("radius", full ? 40.0 : 20.0);
-        if (!(Rb >= 4.0 && Rb <= 200.0)) throw cli_error("--radius must be in [4, 200] grain radii");
-        const double absorption = cli.num("absorption", 0.01);
-        if (!(absorption >= 0.0 && absorption <= 1.0)) throw cli_error("--absorption must be in [0, 1]");
-        const double exposure = cli.num("exposure", 0.0);
-        const std::uint64_t preview_stride = cli.integer("preview-stride", 10);
-        if (preview_stride < 1 || preview_stride > 100) throw cli_error("--preview-stride must be in [1, 100]");
-        const double pa_pinned = cli.has("pa") ? cli.num("pa", 1.0) : 0.0;
-        if (cli.has("pa") && !(pa_pinned > 0.0 && pa_pinned <= 1.0)) throw cli_error("--pa must be in (0, 1]");
-        const std::string pa_estimator = cli.str("pa-estimator", "safe");
+    return run(argc, argv, "meng15_hybrid_convergence",
+               "Meng15 Table 2: time to unit variance of EPT, EPT+VPT and EPT+VPT+DA (P_a = 1 and Eq. 8)",
+               "out/meng15_hybrid_convergence", [&](Example& ex) {
+        const auto spp = ex.opt<std::uint64_t>("spp", 2, 8, "bundles of 16 paths per pixel (>= 2)");
+        const double Rb = ex.opt<double>("radius", 20.0, 40.0, "radius of the sphere of grains in grain radii");
+        const double absorption =
+            ex.opt<double>("absorption", 0.01, "interior absorption of the ice-like grains per grain radius (green)");
+        const auto width_arg = ex.opt<std::uint64_t>("width", 120, 240, "image width in pixels (height = 3/4 width)");
+        const std::string pa_estimator = ex.opt<std::string>(
+            "pa-estimator", "safe",
+            "safe (robust moments, 1 unless the gain is resolved) | robust | paper (Eq. 8 with Eq. 6's variances) | "
+            "moments (exact roulette variance)");
+        const auto preview_stride = ex.opt<std::uint64_t>(
+            "preview-stride", 10, "P_a preview: every k-th pixel in x and y (Meng15: 10, i.e. 1% of the pixels)");
+        const auto pa_given =
+            ex.opt_optional<double>("pa", "pin P_a of the 'P_a opt' techniques to this value in (0, 1] (no preview; reproducible output)");
+        const double exposure = ex.opt<double>("exposure", 0.0, "PNG exposure in stops");
+        ex.ready();
+        const bool full = ex.full();
+        const auto& out = ex.out();
+        const int threads = ex.threads();
+        const std::uint64_t seed = ex.seed();
+        if (spp < 2 || spp > 4096)
+            throw cli_error("--spp = " + std::to_string(spp) + " must be in [2, 4096] (ttuv needs a sample variance)");
+        if (!(Rb >= 4.0 && Rb <= 200.0)) throw cli_error("--radius = " + ex.given_text("radius") + " must be in [4, 200] grain radii");
+        if (!(absorption >= 0.0 && absorption <= 1.0))
+            throw cli_error("--absorption = " + ex.given_text("absorption") + " must be in [0, 1]");
+        if (preview_stride < 1 || preview_stride > 100)
+            throw cli_error("--preview-stride = " + std::to_string(preview_stride) + " must be in [1, 100]");
+        const double pa_pinned = pa_given ? *pa_given : 0.0;
+        if (pa_given && !(pa_pinned > 0.0 && pa_pinned <= 1.0))
+            throw cli_error("--pa = " + ex.given_text("pa") + " must be in (0, 1]");
         if (pa_estimator != "paper" && pa_estimator != "moments" && pa_estimator != "robust" && pa_estimator != "safe")
             throw cli_error("--pa-estimator = '" + pa_estimator + "' must be safe, robust, paper or moments");
-        const std::uint64_t width_arg = cli.integer("width", full ? 240 : 120);
-        if (width_arg < 8 || width_arg > 4096) throw cli_error("--width must be in [8, 4096]");
+        if (width_arg < 8 || width_arg > 4096) throw cli_error("--width = " + std::to_string(width_arg) + " must be in [8, 4096]");
         const int width = int(width_arg), height = std::max(6, int(width_arg * 3 / 4));
 
         // Packing (MD, f = 0.6, grain bounding radius 1), grain (ice-like sphere, slightly
@@ -153,7 +150,7 @@ int main(int argc, char** argv) {
         // Side by side (P_a = 1): EPT | EPT+VPT | EPT+VPT+DA.
         gl::Image strip(3 * width, height);
         int strip_slot = 0;
-        Json json;
+        Json json = ex.summary();
         std::printf("\n  %-18s %6s %11s %11s %9s %10s %19s %19s %9s %9s %7s %6s\n", "technique", "P_a", "ttuv", "ttuv_high",
                     "speedup", "sp_high", "paper speedup", "paper sp_high", "mean", "rel.diff", "switch", "DA/pth");
         for (const Technique& t : techniques) {
@@ -178,7 +175,7 @@ int main(int argc, char** argv) {
                             a.P_a_robust, a.gain, a.gain_se, a.P_a_safe);
             }
             opt.acceptance = Pa;
-            ProgressBar bar(t.name, std::uint64_t(height));
+            ProgressBar bar = ex.progress(t.name, std::uint64_t(height));
             const gl::HybridImages img = gl::render_hybrid(scene_ept, scene_vpt, agg, ctx, camera, int(spp), seed, threads, opt, 1,
                                                            [&](int n) { bar.advance(std::uint64_t(n)); });
             bar.done();
@@ -254,26 +251,10 @@ int main(int argc, char** argv) {
                     "variance, our units: scene radiance^2 x core-seconds)\n");
         gl::write_exr(out / "hybrid_side_by_side.exr", strip);
         gl::write_png(out / "hybrid_side_by_side.png", strip, {exposure});
-        csv.write(out / "meng15_hybrid_convergence.csv");
-        plot_with_matplotlib(out / "meng15_hybrid_convergence.py",
-                             "d = read_csv(r'''" + (out / "meng15_hybrid_convergence.csv").string() +
-                                 "''')\n"
-                                 "names = d['technique'][1:]\n"
-                                 "x = np.arange(len(names))\n"
-                                 "fig, ax = plt.subplots(1, 2, figsize=(11, 4))\n"
-                                 "for k, (col, lo, hi, title) in enumerate([('speedup', 'paper_speedup_min', 'paper_speedup_max', 'combined'),"
-                                 " ('speedup_high', 'paper_speedup_high_min', 'paper_speedup_high_max', 'high order')]):\n"
-                                 "    ours = np.array(d[col][1:]); pl = np.array(d[lo][1:]); ph = np.array(d[hi][1:])\n"
-                                 "    ax[k].bar(x - 0.2, ours, 0.4, label='ours')\n"
-                                 "    ax[k].bar(x + 0.2, np.sqrt(pl * ph), 0.4, yerr=[np.sqrt(pl * ph) - pl, ph - np.sqrt(pl * ph)], "
-                                 "label='Meng15 Table 2 (range over scenes)', alpha=0.6)\n"
-                                 "    ax[k].set_yscale('log'); ax[k].set_xticks(x); ax[k].set_xticklabels(names, rotation=20, fontsize=8)\n"
-                                 "    ax[k].set_title('ttuv speedup over EPT, ' + title); ax[k].legend(fontsize=8)\n"
-                                 "fig.tight_layout(); fig.savefig(png, dpi=110)\n",
-                             out / "meng15_hybrid_convergence.png");
+        const auto csv_path = ex.csv("meng15_hybrid_convergence.csv", csv);
+        ex.plot("meng15_hybrid_convergence", csv_path, out / "meng15_hybrid_convergence.png");
         std::printf("wrote %s/hybrid_*.{exr,png} (hybrid_side_by_side: EPT | EPT+VPT | EPT+VPT+DA), meng15_hybrid_convergence.{csv,png}\n", out.c_str());
         json.num("d_DA", diffusion.d_DA).integer("spp", (long long)spp);
-        std::cout << json.str() << std::endl;
-        return 0;
+        return ex.finish(json);
     });
 }
