@@ -44,7 +44,7 @@ PAPERS = [
 PAPER_OF = {
     "packing": "meng15", "grain_stats": "meng15", "mie": "guo21",
     "slab": "foundation", "vpt_sphere_medium": "foundation", "diffusion_profiles": "foundation",
-    "python_phase": "guo21",
+    "python_phase": "guo21", "ms_table": "wang18",
 }
 OTHER = ("other", "Other programs", None)
 
@@ -168,6 +168,13 @@ KEYS = {
         ("sugar: lambda_s", "grains[5].lambda_s", "1.17", "Meng15 Table 1"),
         ("brown-sugar: beta", "grains[6].beta", "0.71", "Meng15 Table 1"),
         ("brown-sugar: lambda_s", "grains[6].lambda_s", "0.88", "Meng15 Table 1"),
+    ],
+    "ms_table": [
+        ("orders >= 2, albedo 0.7: total", "total[0]", "1.633 (alpha^2 / (1 - alpha))", "closed form, infinite medium"),
+        ("albedo 0.9: total", "total[1]", "8.1 (closed form; the box holds part)", "closed form"),
+        ("albedo 0.99: captured by the box", "captured_fraction[2]", "", "light beyond +-10 mfp"),
+        ("table MB (dense)", "table_mb", "8400 dense, 36-72 compressed", "Wang18 Table 2"),
+        ("ranks", "ranks", "", ""),
     ],
     "grain_stats": [
         ("glass bead: beta", "beta", "1.00", "Meng15 Table 1 (glass beads)"),

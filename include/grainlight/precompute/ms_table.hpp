@@ -105,15 +105,30 @@ struct MsTableTally {
 };
 }  // namespace detail
 
-/// Precompute the table with the walk kernel. `phase` is any PhaseFunction with Spectrum<N, F>;
-/// `albedo` per channel in [0, 1). Throws invalid_argument on bad options.
-template <std::size_t N, class Phase>
-[[nodiscard]] MsTable<N> build_ms_table(const Phase& phase, const Spectrum<N, typename Phase::Float>& albedo,
-                                        const MsTableOptions& opt) {
-    using F = typename Phase::Float;
-    using S = Spectrum<N, F>;
-    static_assert(std::is_same_v<typename Phase::Spectrum, S>,
-                  "build_ms_table: the phase function's spectrum must be Spectrum<N, F>");
+/// The incoming-direction histograms of a contiguous range of the table build's source-particle
+/// blocks (build_ms_table_blocks), one per block. Ranges computed apart (threads, processes, MPI
+/// ranks) are appended in block order and summed in that order by finish_ms_table, so the table
+/// does not depend on how the build was split.
+struct MsTableHistograms {
+    std::uint64_t first_block = 0;               ///< index of blocks[0] in the build
+    std::vector<std::vector<double>> blocks;     ///< per-block histogram (channel, cell, direction bin)
+    /// One past the last block held.
+    [[nodiscard]] std::uint64_t end_block() const noexcept { return first_block + blocks.size(); }
+    /// Append the blocks that follow this range (next.first_block == end_block()).
+    void append(MsTableHistograms&& next) {
+        check_argument(next.first_block == end_block(), "MsTableHistograms::append", "next.first_block",
+                       double(next.first_block), "end_block() = " + std::to_string(end_block()));
+        for (auto& h : next.blocks) {
+            check_argument(blocks.empty() || h.size() == blocks.front().size(), "MsTableHistograms::append",
+                           "block size", double(h.size()), "the size of the blocks held");
+            blocks.push_back(std::move(h));
+        }
+    }
+};
+
+namespace detail {
+/// The table grid of `opt`, validated (throws invalid_argument naming the option).
+inline MsTableGrid ms_table_grid(const MsTableOptions& opt) {
     MsTableGrid grid;
     check_argument(opt.n_rho >= 1 && opt.n_rho <= 4096, "MsTable::build", "n_rho", opt.n_rho, "[1, 4096]");
     check_argument(opt.n_z >= 1 && opt.n_z <= 4096, "MsTable::build", "n_z", opt.n_z, "[1, 4096]");
@@ -130,29 +145,76 @@ template <std::size_t N, class Phase>
     check_argument(opt.photons >= 1, "MsTable::build", "photons", double(opt.photons), ">= 1");
     check_argument(opt.blocks >= 1 && opt.blocks <= 1024, "MsTable::build", "blocks", opt.blocks, "[1, 1024]");
     check_argument(opt.escape_radius > 0, "MsTable::build", "escape_radius", opt.escape_radius, "(0, inf)");
+    return grid;
+}
+
+/// Albedo per channel as doubles, each checked to lie in [0, 1).
+template <std::size_t N, class F>
+std::array<double, N> ms_table_albedo(const Spectrum<N, F>& albedo) {
     std::array<double, N> alb{};
     for (std::size_t c = 0; c < N; ++c) {
         check_argument(albedo[c] >= F(0) && albedo[c] < F(1), "MsTable::build", "albedo", double(albedo[c]), "[0, 1)");
         alb[c] = double(albedo[c]);
     }
-    const std::size_t n_dir = grid.directions();
-    const std::size_t n_all = N * grid.cells() * n_dir;
-    // A zero table with the final grid: the tally uses its index helpers.
-    const MsTable<N> shape(grid, alb, double(phase.mean_cosine()[0]), opt.photons, std::vector<float>(n_all, 0.0f));
+    return alb;
+}
 
-    // Incoming-direction histograms, one per block, summed in block order.
+/// A zero table with the final grid: the tally and the finish step use its index helpers.
+template <std::size_t N, class Phase>
+MsTable<N> ms_table_shape(const Phase& phase, const std::array<double, N>& alb, const MsTableGrid& grid,
+                          const MsTableOptions& opt) {
+    const std::size_t n_all = N * grid.cells() * grid.directions();
+    return MsTable<N>(grid, alb, double(phase.mean_cosine()[0]), opt.photons, std::vector<float>(n_all, 0.0f));
+}
+
+template <std::size_t N, class Phase>
+void check_ms_table_phase() {
+    using F = typename Phase::Float;
+    static_assert(std::is_same_v<typename Phase::Spectrum, Spectrum<N, F>>,
+                  "build_ms_table: the phase function's spectrum must be Spectrum<N, F>");
+}
+}  // namespace detail
+
+/// Number of source-particle blocks of the build `opt` (opt.blocks, validated).
+[[nodiscard]] inline std::uint64_t ms_table_blocks(const MsTableOptions& opt) {
+    (void)detail::ms_table_grid(opt);
+    return std::uint64_t(opt.blocks);
+}
+
+/// Trace the source-particle blocks [block_begin, block_end) of the table build `opt` (particles
+/// keyed by their global index: the result does not depend on how the build is split) and return
+/// their histograms. Throws invalid_argument on bad options or a block range outside the build.
+template <std::size_t N, class Phase>
+[[nodiscard]] MsTableHistograms build_ms_table_blocks(const Phase& phase,
+                                                      const Spectrum<N, typename Phase::Float>& albedo,
+                                                      const MsTableOptions& opt, std::uint64_t block_begin,
+                                                      std::uint64_t block_end) {
+    using F = typename Phase::Float;
+    using S = Spectrum<N, F>;
+    detail::check_ms_table_phase<N, Phase>();
+    const MsTableGrid grid = detail::ms_table_grid(opt);
+    const std::array<double, N> alb = detail::ms_table_albedo(albedo);
+    check_argument(block_begin <= block_end && block_end <= std::uint64_t(opt.blocks), "build_ms_table_blocks",
+                   "block range end", double(block_end), "block_begin <= block_end <= opt.blocks");
+    const std::size_t n_all = N * grid.cells() * grid.directions();
+    const MsTable<N> shape = detail::ms_table_shape(phase, alb, grid, opt);
+
     using Medium = ContinuousMedium<Phase, S>;
     const Medium medium(S(F(1)), albedo, phase);
     const InfiniteMediumScene<Medium> scene{medium};
-    std::vector<std::vector<double>> hist(std::size_t(opt.blocks));
+    MsTableHistograms out;
+    out.first_block = block_begin;
+    out.blocks.resize(std::size_t(block_end - block_begin));
     const std::uint64_t per_block = (opt.photons + std::uint64_t(opt.blocks) - 1) / std::uint64_t(opt.blocks);
+    const std::int64_t n_blocks = std::int64_t(block_end - block_begin);
 #if defined(_OPENMP)
 #pragma omp parallel for schedule(dynamic, 1)
 #endif
-    for (int b = 0; b < opt.blocks; ++b) {
-        std::vector<double>& h = hist[std::size_t(b)];
+    for (std::int64_t k = 0; k < n_blocks; ++k) {
+        const std::uint64_t b = block_begin + std::uint64_t(k);
+        std::vector<double>& h = out.blocks[std::size_t(k)];
         h.assign(n_all, 0.0);
-        const std::uint64_t p0 = std::uint64_t(b) * per_block;
+        const std::uint64_t p0 = std::min(opt.photons, b * per_block);
         const std::uint64_t p1 = std::min(opt.photons, p0 + per_block);
         detail::MsTableTally<N, F, S> tally{shape, h, opt.escape_radius * opt.escape_radius};
         WalkOptions<F> wopt;
@@ -166,8 +228,28 @@ template <std::size_t N, class Phase>
             (void)walk(scene, st, rng, tally, wopt);
         }
     }
+    return out;
+}
+
+/// The table from the histograms of every block of the build `opt` ([0, opt.blocks), appended in
+/// order), summed in block order: the same table for any split of the build.
+template <std::size_t N, class Phase>
+[[nodiscard]] MsTable<N> finish_ms_table(const Phase& phase, const Spectrum<N, typename Phase::Float>& albedo,
+                                         const MsTableOptions& opt, const MsTableHistograms& hist) {
+    using F = typename Phase::Float;
+    detail::check_ms_table_phase<N, Phase>();
+    const MsTableGrid grid = detail::ms_table_grid(opt);
+    const std::array<double, N> alb = detail::ms_table_albedo(albedo);
+    check_argument(hist.first_block == 0 && hist.end_block() == std::uint64_t(opt.blocks), "finish_ms_table",
+                   "histogram blocks", double(hist.blocks.size()), "every block [0, opt.blocks) of the build");
+    const std::size_t n_dir = grid.directions();
+    const std::size_t n_all = N * grid.cells() * n_dir;
+    for (const auto& h : hist.blocks)
+        check_argument(h.size() == n_all, "finish_ms_table", "block histogram size", double(h.size()),
+                       std::to_string(n_all) + " (the grid of opt)");
+    const MsTable<N> shape = detail::ms_table_shape(phase, alb, grid, opt);
     std::vector<double> sum(n_all, 0.0);
-    for (const auto& h : hist)
+    for (const auto& h : hist.blocks)
         for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += h[i];
 
     // Phase matrix between direction bins, averaged over the mirror images (+phi, -phi).
@@ -196,6 +278,15 @@ template <std::size_t N, class Phase>
                 }
             }
     return MsTable<N>(grid, alb, double(phase.mean_cosine()[0]), opt.photons, std::move(values));
+}
+
+/// Precompute the table with the walk kernel (every block of the build on this process's threads;
+/// build_ms_table_blocks + finish_ms_table split it over processes). `phase` is any PhaseFunction
+/// with Spectrum<N, F>; `albedo` per channel in [0, 1). Throws invalid_argument on bad options.
+template <std::size_t N, class Phase>
+[[nodiscard]] MsTable<N> build_ms_table(const Phase& phase, const Spectrum<N, typename Phase::Float>& albedo,
+                                        const MsTableOptions& opt) {
+    return finish_ms_table(phase, albedo, opt, build_ms_table_blocks(phase, albedo, opt, 0, ms_table_blocks(opt)));
 }
 
 /// Save atomically in the shared container (kind "MSTB"). Throws io_error.
