@@ -14,6 +14,11 @@
 // stepping with the largest shell that fits between the faces, with exact steps within r0 of a
 // face. --paths keeps meaning slab photons.
 //
+// Built with MPI, `mpirun -np K slab --method shells ...` splits the shell precomputation's path
+// blocks over the ranks (rank 0 merges them in order, builds the table, writes
+// DIR/slab_shells.shel when --out is given and solves the slab): the table file and R, T are
+// byte-identical to one process.
+//
 // B may be `inf` (semi-infinite). Prints one JSON line (the last line of stdout):
 //   {"R":..,"T":..,"R_stderr":..,"T_stderr":..,"paths":..,"seconds":..}
 // plus, for --method shells, shell_build_seconds, shell_steps_per_path, exact_steps_per_path,
@@ -36,6 +41,41 @@
 
 #include "common/harness.hpp"
 #include "grainlight/integrators/slab.hpp"
+
+namespace {
+// Shell samples as bytes for the gather on rank 0 (same radii and f_a histogram on every rank).
+std::vector<unsigned char> encode_shell_samples(const grainlight::ShellSamples& s) {
+    grainlight::ByteWriter w;
+    w.put(std::uint64_t(s.n_shells())).put(s.n_paths).put(s.fa_d_max);
+    w.put(std::uint64_t(s.radii.size())).put_array(s.radii.data(), s.radii.size());
+    w.put(std::uint64_t(s.fa_counts.size())).put_array(s.fa_counts.data(), s.fa_counts.size());
+    for (std::size_t i = 0; i < s.n_shells(); ++i) {
+        w.put(s.n_unscattered[i]).put(s.n_absorbed[i]).put(std::uint64_t(s.coords[i].size()));
+        w.put_array(s.coords[i].data(), s.coords[i].size());
+    }
+    return w.bytes();
+}
+grainlight::ShellSamples decode_shell_samples(const std::vector<unsigned char>& bytes) {
+    grainlight::ByteReader r(bytes, "shell samples from another rank");
+    const auto n = r.get<std::uint64_t>();
+    grainlight::ShellSamples s;
+    s.n_paths = r.get<std::uint64_t>();
+    s.fa_d_max = r.get<double>();
+    r.get_array(s.radii, r.get<std::uint64_t>());
+    r.get_array(s.fa_counts, r.get<std::uint64_t>());
+    if (s.radii.size() != n) r.fail("radius count mismatch");
+    s.coords.resize(std::size_t(n));
+    s.n_unscattered.resize(std::size_t(n));
+    s.n_absorbed.resize(std::size_t(n));
+    for (std::size_t i = 0; i < n; ++i) {
+        s.n_unscattered[i] = r.get<std::uint64_t>();
+        s.n_absorbed[i] = r.get<std::uint64_t>();
+        r.get_array(s.coords[i], r.get<std::uint64_t>());
+    }
+    r.expect_end();
+    return s;
+}
+}  // namespace
 
 int main(int argc, char** argv) {
     return gl_examples::run(argc, argv, "slab",
@@ -90,8 +130,19 @@ int main(int argc, char** argv) {
                 p.optical_depth, int(std::min<std::uint64_t>(n_radii, 100000)), shell_r0, shell_rmax);
             const auto& medium = problem.scene().medium(0);
             const grainlight::ContinuousShellSource<std::decay_t<decltype(medium)>> source(medium);
-            const grainlight::ShellSamples samples =
-                grainlight::collect_shell_samples(source, radii, shell_paths, seed ^ 0x5e11u);
+            // MPI: each rank samples a contiguous range of the path blocks; rank 0 merges them in
+            // rank order (integer counts, appended exits: the one-process samples exactly).
+            const gl_examples::MpiSession& mpi = ex.mpi();
+            const auto [blk0, blk1] = mpi.block_range(grainlight::shell_sample_blocks(shell_paths));
+            const grainlight::ShellSamples mine =
+                grainlight::collect_shell_sample_blocks(source, radii, shell_paths, seed ^ 0x5e11u, blk0, blk1);
+            const auto all = mpi.gather_bytes(encode_shell_samples(mine));
+            if (!mpi.root()) return ex.finish({});  // rank 0 builds the table and solves the slab
+            grainlight::ShellSamples samples = mine;
+            if (mpi.size() > 1) {
+                samples = decode_shell_samples(all[0]);
+                for (int r = 1; r < mpi.size(); ++r) samples.merge(decode_shell_samples(all[std::size_t(r)]));
+            }
             grainlight::ShellBuildOptions bo;
             bo.n_c = int(grid[0]);
             bo.n_u = int(grid[1]);
@@ -100,6 +151,7 @@ int main(int argc, char** argv) {
             bo.k_nn = int(shell_knn);
             grainlight::ShellBuildResult built = grainlight::build_shell_table(samples, bo);
             nmf_error = built.nmf_relative_error;
+            if (ex.given("out")) built.table.save(ex.out() / "slab_shells.shel");  // the precomputation's file
             n_shells = built.table.n_shells();
             shell_slab = std::make_unique<grainlight::ShellSlab>(p, std::move(built.table));
             build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - b0).count();
@@ -108,6 +160,7 @@ int main(int argc, char** argv) {
                       << build_seconds << " s\n";
         }
 
+        if (!ex.root()) return ex.finish({});  // MPI splits only the shell precomputation
         // Fixed-size blocks, reduced in block order: the same numbers for any thread count.
         struct Part {
             grainlight::SlabTally tally{};

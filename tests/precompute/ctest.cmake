@@ -92,3 +92,14 @@ if(TARGET MPI::MPI_CXX AND MPIEXEC_EXECUTABLE AND GRAINLIGHT_BUILD_EXAMPLES AND 
   set_tests_properties(ms_table_mpi PROPERTIES LABELS "example;precompute;mpi" TIMEOUT 300
     PASS_REGULAR_EXPRESSION "byte-identical to one process")
 endif()
+# The Moon07 shell table of `slab --method shells` sampled by 2 MPI ranks (path-block ranges merged
+# in order) is the single-process table file byte for byte.
+if(TARGET MPI::MPI_CXX AND MPIEXEC_EXECUTABLE AND GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/slab.cpp)
+  add_test(NAME slab_shells_mpi
+           COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/common/mpi_compare.sh ${MPIEXEC_EXECUTABLE} 2
+                   ${CMAKE_CURRENT_BINARY_DIR}/mpi_slab_shells_work slab_shells.shel $<TARGET_FILE:slab>
+                   --method shells --albedo 0.95 --optical-depth 4 --g 0.3 --paths 20000 --shell-paths 20000
+                   --shell-radii 6 --shell-grid 12,8,8 --seed 2)
+  set_tests_properties(slab_shells_mpi PROPERTIES LABELS "example;precompute;shells;mpi" TIMEOUT 300
+    PASS_REGULAR_EXPRESSION "byte-identical to one process")
+endif()

@@ -347,13 +347,23 @@ private:
     int max_events_;
 };
 
-/// Run `n_paths` paths of `source` (anything with `void trace(Rng&, ShellRecorder&) const`) and
-/// tally their first shell exits. Path p uses Pcg32::from_key(seed, block, p): the result does
-/// not depend on the number of OpenMP threads.
+/// Paths per block of collect_shell_samples (the unit of work split over threads and processes).
+inline constexpr std::uint64_t shell_sample_block = 4096;
+
+/// Number of path blocks of a collect_shell_samples run of `n_paths` paths.
+[[nodiscard]] constexpr std::uint64_t shell_sample_blocks(std::uint64_t n_paths) noexcept {
+    return (n_paths + shell_sample_block - 1) / shell_sample_block;
+}
+
+/// The path blocks [block_begin, block_end) of collect_shell_samples(source, radii, n_paths, seed,
+/// fa_bins, fa_d_max): the tallies of those paths only, in block order. Tallies of consecutive
+/// ranges merged in order (ShellSamples::merge) equal the one-call result exactly (integer counts
+/// and appended exit lists), so a run split over processes gives the same table.
 template <class Source>
-[[nodiscard]] ShellSamples collect_shell_samples(const Source& source, const std::vector<double>& radii,
-                                                 std::uint64_t n_paths, std::uint64_t seed, int fa_bins = 256,
-                                                 double fa_d_max = 0) {
+[[nodiscard]] ShellSamples collect_shell_sample_blocks(const Source& source, const std::vector<double>& radii,
+                                                       std::uint64_t n_paths, std::uint64_t seed,
+                                                       std::uint64_t block_begin, std::uint64_t block_end,
+                                                       int fa_bins = 256, double fa_d_max = 0) {
     constexpr const char* where = "collect_shell_samples";
     check_argument(!radii.empty(), where, "radii.size()", radii.size(), ">= 1");
     for (std::size_t i = 0; i < radii.size(); ++i)
@@ -363,24 +373,39 @@ template <class Source>
     check_argument(fa_bins >= 2 && fa_bins <= (1 << 20), where, "fa_bins", fa_bins, "[2, 2^20]");
     if (!(fa_d_max > 0)) fa_d_max = 2.0 * radii.back();
     check_argument(std::isfinite(fa_d_max), where, "fa_d_max", fa_d_max, "finite");
-    constexpr std::uint64_t block = 4096;
-    const std::uint64_t n_blocks = (n_paths + block - 1) / block;
+    check_argument(block_begin <= block_end && block_end <= shell_sample_blocks(n_paths), where, "block range end",
+                   double(block_end), "block_begin <= block_end <= shell_sample_blocks(n_paths)");
+    constexpr std::uint64_t block = shell_sample_block;
+    const std::uint64_t n_blocks = block_end - block_begin;
     std::vector<ShellSamples> parts(n_blocks, ShellSamples(radii, fa_bins, fa_d_max));
 #if defined(_OPENMP)
 #pragma omp parallel for schedule(dynamic, 1)
 #endif
-    for (std::int64_t b = 0; b < std::int64_t(n_blocks); ++b) {
-        ShellSamples& part = parts[std::size_t(b)];
+    for (std::int64_t k = 0; k < std::int64_t(n_blocks); ++k) {
+        const std::uint64_t b = block_begin + std::uint64_t(k);
+        ShellSamples& part = parts[std::size_t(k)];
         ShellRecorder rec(part);
-        const std::uint64_t p0 = std::uint64_t(b) * block, p1 = std::min(n_paths, p0 + block);
+        const std::uint64_t p0 = b * block, p1 = std::min(n_paths, p0 + block);
         for (std::uint64_t p = p0; p < p1; ++p) {
-            Rng rng = Rng::from_key(seed, std::uint64_t(b), p);
+            Rng rng = Rng::from_key(seed, b, p);
             source.trace(rng, rec);
         }
     }
     ShellSamples all(radii, fa_bins, fa_d_max);
     for (const auto& p : parts) all.merge(p);
     return all;
+}
+
+/// Run `n_paths` paths of `source` (anything with `void trace(Rng&, ShellRecorder&) const`) and
+/// tally their first shell exits. Path p uses Pcg32::from_key(seed, block, p): the result does
+/// not depend on the number of OpenMP threads (collect_shell_sample_blocks over every block).
+template <class Source>
+[[nodiscard]] ShellSamples collect_shell_samples(const Source& source, const std::vector<double>& radii,
+                                                 std::uint64_t n_paths, std::uint64_t seed, int fa_bins = 256,
+                                                 double fa_d_max = 0) {
+    check_argument(n_paths >= 1, "collect_shell_samples", "n_paths", n_paths, ">= 1");
+    return collect_shell_sample_blocks(source, radii, n_paths, seed, 0, shell_sample_blocks(n_paths), fa_bins,
+                                       fa_d_max);
 }
 
 namespace detail {
