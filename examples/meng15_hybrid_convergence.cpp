@@ -10,17 +10,24 @@
 //   meng15_hybrid_convergence [--quality quick|full] [--out DIR] [--seed S] [--threads N]
 //                             [--spp N] [--radius R] [--absorption A] [--width W] [--exposure EV]
 //                             [--pa-estimator paper|moments] [--preview-stride K] [--pa VALUE]
+//                             [--checkpoint SECONDS] [--resume]
+//
+// --checkpoint / --resume: one checkpoint per technique's render in --out (render_hybrid's
+// HybridOptions::checkpoint); the "P_a opt" techniques resume only with --pa pinned (a preview
+// measures timings, so its P_a differs between runs, and a checkpoint of another P_a is refused).
 //
 // The effective medium comes from the virtual scatterometer of the same grain
 // (precompute/scatterometer.hpp, make_effective_medium). Writes EXR + PNG per technique, a CSV of
 // the table, a bar plot of the speedups (ours vs the paper's), and a JSON summary line.
 #include <chrono>
+#include <functional>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <string>
 #include <vector>
 
+#include "common/checkpoint.hpp"
 #include "common/harness.hpp"
 #include "grainlight/integrators/hybrid.hpp"
 #include "grainlight/media/continuous.hpp"
@@ -67,6 +74,7 @@ int main(int argc, char** argv) {
         const auto pa_given =
             ex.opt_optional<double>("pa", "pin P_a of the 'P_a opt' techniques to this value in (0, 1] (no preview; reproducible output)");
         const double exposure = ex.opt<double>("exposure", 0.0, "PNG exposure in stops");
+        ex.checkpointable();  // --checkpoint SECONDS / --resume: one checkpoint per technique's render
         ex.ready();
         const bool full = ex.full();
         const auto& out = ex.out();
@@ -175,6 +183,12 @@ int main(int argc, char** argv) {
                             a.P_a_robust, a.gain, a.gain_se, a.P_a_safe);
             }
             opt.acceptance = Pa;
+            std::string stem = t.name;  // file-name-safe label of this technique's render
+            for (char& c : stem) c = (c == ' ' || c == '+' || c == '=') ? '_' : char(std::tolower(c));
+            opt.checkpoint = checkpoint_for(ex, stem);
+            // P_a from a timed preview differs between runs: a checkpoint of another P_a is refused
+            // (pin --pa to resume the "P_a opt" renders).
+            opt.checkpoint.key ^= std::hash<double>{}(Pa);
             ProgressBar bar = ex.progress(t.name, std::uint64_t(height));
             const gl::HybridImages img = gl::render_hybrid(scene_ept, scene_vpt, agg, ctx, camera, int(spp), seed, threads, opt, 1,
                                                            [&](int n) { bar.advance(std::uint64_t(n)); });

@@ -65,3 +65,15 @@ if(TARGET meng15_fig13_snowman OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJEC
   add_test(NAME meng15_fig13_snowman_bad_budget COMMAND $<TARGET_FILE:meng15_fig13_snowman> --budget 0)
   set_tests_properties(meng15_fig13_snowman_bad_budget PROPERTIES WILL_FAIL TRUE LABELS "example;hybrid")
 endif()
+
+# Resumable hybrid renders (hardening issue): killed with SIGKILL once checkpoints exist, then
+# resumed: every technique's EXR byte-identical to an uninterrupted run (P_a pinned by --pa).
+if(TARGET meng15_hybrid_convergence OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/meng15_hybrid_convergence.cpp))
+  add_test(NAME meng15_hybrid_convergence_kill_resume
+           COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/common/kill_resume.sh $<TARGET_FILE:meng15_hybrid_convergence>
+                   ${CMAKE_CURRENT_BINARY_DIR}/kill_resume_meng15_hybrid
+                   "hybrid_ept.exr hybrid_ept_vpt_pa_1.exr hybrid_ept_vpt_da_pa_opt.exr hybrid_switch_depth.exr"
+                   --spp 2 --radius 10 --width 40 --threads 2 --pa 0.5 --seed 3)
+  set_tests_properties(meng15_hybrid_convergence_kill_resume PROPERTIES LABELS "example;hybrid;checkpoint" TIMEOUT 300
+    PASS_REGULAR_EXPRESSION "byte-identical")
+endif()

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <filesystem>
 #include <vector>
 
 #include "grainlight/integrators/ept.hpp"
@@ -186,4 +187,66 @@ TEST_CASE("EPT -> VPT -> DA vs EPT on a sphere of grains larger than 2 d_DA", "[
     REQUIRE(connections > 200);
     REQUIRE(std::abs(mv - me) < 0.06 * me + 3 * err_v);  // EPT -> VPT alone: the effective medium
     REQUIRE(std::abs(md - me) < 0.15 * me + 3 * err);     // + DA: the diffusion model's bias
+}
+
+TEST_CASE("render_hybrid: a render resumed from a partial checkpoint equals the uninterrupted one", "[hybrid][render][checkpoint]") {
+    const Setup s = make_setup(6.0, RGBd{0.02, 0.05, 0.1}, 3);
+    const HybridContext<BoundaryDistance<SphereBoundary>> ctx{s.medium, s.boundary, {s.shape}, &s.diffusion};
+    const PinholeCamera<float> cam(Vec3f(0, 4, 20), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 40.0f, 10, 8);
+    HybridOptions opt;
+    opt.mode = HybridMode::ept_vpt_da;
+    opt.bundle_size = 8;
+    const HybridImages ref = render_hybrid(s.ept, s.vpt, s.agg, ctx, cam, 2, 7, 2, opt);
+    // A checkpoint of the whole render, then rows 2..5 forgotten (as if killed while they ran).
+    const auto path = std::filesystem::temp_directory_path() / "grainlight_test_hybrid_resume.ckpt";
+    std::filesystem::remove(path);
+    opt.checkpoint.path = path;
+    opt.checkpoint.interval_seconds = 0;
+    opt.checkpoint.remove_when_done = false;
+    opt.checkpoint.key = 42;
+    (void)render_hybrid(s.ept, s.vpt, s.agg, ctx, cam, 2, 7, 2, opt);
+    FilmCheckpoint ck = FilmCheckpoint::load(path);
+    REQUIRE(ck.films.size() == 8);
+    REQUIRE(ck.rows_finished() == 8);
+    std::vector<Film> kept;
+    for (const Film& f : ck.films) {
+        std::vector<double> sums(f.sums().begin(), f.sums().end()), weights(f.weights().begin(), f.weights().end());
+        std::vector<std::uint32_t> nonfinite(f.nonfinite_counts().begin(), f.nonfinite_counts().end());
+        for (int y = 2; y < 6; ++y)
+            for (int x = 0; x < f.width(); ++x) {
+                const std::size_t i = std::size_t(y) * std::size_t(f.width()) + std::size_t(x);
+                sums[3 * i] = sums[3 * i + 1] = sums[3 * i + 2] = 0;
+                weights[i] = 0;
+                nonfinite[i] = 0;
+            }
+        kept.push_back(Film::from_accumulators(f.width(), f.height(), std::move(sums), std::move(weights), std::move(nonfinite)));
+    }
+    for (int y = 2; y < 6; ++y) ck.rows_done[std::size_t(y)] = 0;
+    ck.films = std::move(kept);
+    ck.save(path);
+    opt.checkpoint.resume = true;
+    opt.checkpoint.remove_when_done = true;
+    int rows_rendered = 0;
+    const HybridImages res = render_hybrid(s.ept, s.vpt, s.agg, ctx, cam, 2, 7, 1, opt, 1, [&](int n) { rows_rendered += n; });
+    CHECK(rows_rendered == 8);  // progress counts every row, resumed or rendered
+    CHECK(!std::filesystem::exists(path));
+    CHECK(res.low.image().rgb == ref.low.image().rgb);
+    CHECK(res.high.image().rgb == ref.high.image().rgb);
+    CHECK(res.da.image().rgb == ref.da.image().rgb);
+    CHECK(res.switch_depth.rgb == ref.switch_depth.rgb);
+    CHECK(res.pixel_variance.rgb == ref.pixel_variance.rgb);
+    CHECK(res.var_total == ref.var_total);
+    CHECK(res.var_total_se == ref.var_total_se);
+    CHECK(res.m2_high == ref.m2_high);
+    CHECK(res.counters.paths == ref.counters.paths);
+    CHECK(res.counters.switched == ref.counters.switched);
+    CHECK(res.counters.da == ref.counters.da);
+    CHECK(res.counters.da > 0);  // the DA part ran: the statistics compared are not all zero
+    CHECK(res.cpu_seconds_low + res.cpu_seconds_high > 0);
+    // A checkpoint of another render (other key) is refused with a message, not mixed in.
+    opt.checkpoint.remove_when_done = false;
+    (void)render_hybrid(s.ept, s.vpt, s.agg, ctx, cam, 2, 7, 1, opt);
+    opt.checkpoint.key = 43;
+    CHECK_THROWS_WITH(render_hybrid(s.ept, s.vpt, s.agg, ctx, cam, 2, 7, 1, opt), Catch::Contains("another render"));
+    std::filesystem::remove(path);
 }

@@ -204,6 +204,14 @@ struct HybridOptions {
     /// ray along -omega_i); false: the semi-infinite improved-diffusion dipole.
     bool multipole = true;
     bool measure_time = false;      ///< time the EPT and VPT/DA parts (for P_a and ttuv)
+    /// Periodic checkpoints and resume of render_hybrid (integrators/render.hpp; off by default).
+    /// A checkpoint holds the finished rows' films, per-pixel statistics, CPU times and counters,
+    /// so a resumed render gives the same images and the same ttuv inputs as one uninterrupted run.
+    CheckpointOptions checkpoint{};
+    /// Render only the rows y with y % row_stride == row_offset of the (strided) image: one of
+    /// row_stride processes' share (MPI ranks); the other rows stay empty.
+    int row_offset = 0;
+    int row_stride = 1;  ///< see row_offset
 
     /// Throws grainlight::invalid_argument for out-of-range fields.
     void validate(const char* where) const {
@@ -822,93 +830,123 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
     img.mode = opt.mode;
     img.pixel_variance = Image(w, h);
     img.pixel_m2_high = Image(w, h);
-    struct RowStats {
-        double var_t = 0, var_t2 = 0, var_l = 0, var_h = 0, m2_h = 0, sec_l = 0, sec_h = 0;
-        HybridCounters c{};
-    };
-    std::vector<RowStats> rows(static_cast<std::size_t>(h));
-#if defined(_OPENMP)
-    const int nt = threads > 0 ? threads : omp_get_max_threads();
-#pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
-#endif
-    for (int y = 0; y < h; ++y) {
-        RowStats& rs = rows[std::size_t(y)];
-        const double cpu0 = detail::thread_cpu_seconds();
-        double wall_l = 0, wall_h = 0;
-        std::array<Ray<F>, 64> rays;
-        std::array<Rng, 64> rngs;
-        for (int x = 0; x < w; ++x) {
-            const int X = std::min(W - 1, x * stride + stride / 2), Y = std::min(H - 1, y * stride + stride / 2);
-            const std::uint64_t pixel = std::uint64_t(Y) * std::uint64_t(W) + std::uint64_t(X);
-            Welford wt, wl, wh;
-            double depth_sum = 0, depth_n = 0;
-            for (int s = 0; s < spp; ++s) {
-                for (int i = 0; i < N; ++i) {
-                    rngs[std::size_t(i)] = Rng::from_key(seed, pixel, std::uint64_t(s) * std::uint64_t(N) + std::uint64_t(i));
-                    const Vec2<F> u = rngs[std::size_t(i)].template uniform2<F>();
-                    rays[std::size_t(i)] = camera.generate_ray(F(X) + u.x, F(Y) + u.y);
-                }
-                const auto b = hybrid_bundle(scene_ept, scene_vpt, agg, ctx, rays.data(), rngs.data(), N, opt);
-                for (int i = 0; i < N; ++i)
-                    if (b.path[std::size_t(i)].switched) {
-                        depth_sum += double(b.path[std::size_t(i)].switch_order);
-                        depth_n += 1;
+    // The row driver (render_rows: threads, row shares, checkpoints) renders into 8 films: the
+    // low / high / DA images, then per-pixel statistics as exact doubles (add_rgb once per pixel):
+    // (var_total, var_low, var_high), (E[H^2], mean switch depth, 0); per row at pixel (0, y): (CPU
+    // seconds low, high, 0) and the counters. Everything the summary below needs is in the films,
+    // so a resumed render (checkpointed films) gives the same result as an uninterrupted one.
+    enum : int { f_low, f_high, f_da, f_var, f_m2_depth, f_seconds, f_count_a, f_count_b, n_films };
+    RenderOptions ro;
+    ro.spp = spp;
+    ro.seed = seed;
+    ro.threads = threads;
+    ro.checkpoint = opt.checkpoint;
+    ro.row_offset = opt.row_offset;
+    ro.row_stride = opt.row_stride;
+    std::vector<Film> films = render_rows(
+        w, h, n_films, ro,
+        [&](int y, std::span<Film> f) {
+            const double cpu0 = detail::thread_cpu_seconds();
+            double wall_l = 0, wall_h = 0;
+            HybridCounters rc{};
+            std::array<Ray<F>, 64> rays;
+            std::array<Rng, 64> rngs;
+            for (int x = 0; x < w; ++x) {
+                const int X = std::min(W - 1, x * stride + stride / 2), Y = std::min(H - 1, y * stride + stride / 2);
+                const std::uint64_t pixel = std::uint64_t(Y) * std::uint64_t(W) + std::uint64_t(X);
+                Welford wt, wl, wh;
+                double depth_sum = 0, depth_n = 0;
+                for (int s = 0; s < spp; ++s) {
+                    for (int i = 0; i < N; ++i) {
+                        rngs[std::size_t(i)] =
+                            Rng::from_key(seed, pixel, std::uint64_t(s) * std::uint64_t(N) + std::uint64_t(i));
+                        const Vec2<F> u = rngs[std::size_t(i)].template uniform2<F>();
+                        rays[std::size_t(i)] = camera.generate_ray(F(X) + u.x, F(Y) + u.y);
                     }
-                S lo = b.mean_low(), hi = b.mean_high(), da = b.mean_da();
-                // Non-finite bundle means are counted per pixel (Film::nonfinite_samples), then zeroed.
-                if (!lo.is_finite()) {
-                    img.low.add_nonfinite(x, y);
-                    lo = S(0.0f);
+                    const auto b = hybrid_bundle(scene_ept, scene_vpt, agg, ctx, rays.data(), rngs.data(), N, opt);
+                    for (int i = 0; i < N; ++i)
+                        if (b.path[std::size_t(i)].switched) {
+                            depth_sum += double(b.path[std::size_t(i)].switch_order);
+                            depth_n += 1;
+                        }
+                    S lo = b.mean_low(), hi = b.mean_high(), da = b.mean_da();
+                    // Non-finite bundle means are counted per pixel (Film::nonfinite_samples), then zeroed.
+                    if (!lo.is_finite()) {
+                        f[f_low].add_nonfinite(x, y);
+                        lo = S(0.0f);
+                    }
+                    if (!hi.is_finite()) {
+                        f[f_high].add_nonfinite(x, y);
+                        hi = S(0.0f);
+                        da = S(0.0f);
+                    }
+                    if (!da.is_finite()) {
+                        f[f_da].add_nonfinite(x, y);
+                        da = S(0.0f);
+                    }
+                    f[f_low].add_sample(x, y, lo);
+                    f[f_high].add_sample(x, y, hi);
+                    f[f_da].add_sample(x, y, da);
+                    wl.add(double(lo.average()));
+                    wh.add(double(hi.average()));
+                    wt.add(double(lo.average()) + double(hi.average()));
+                    wall_l += b.seconds_low;
+                    wall_h += b.seconds_high;
+                    rc.merge(b.counters);
                 }
-                if (!hi.is_finite()) {
-                    img.high.add_nonfinite(x, y);
-                    hi = S(0.0f);
-                    da = S(0.0f);
-                }
-                if (!da.is_finite()) {
-                    img.da.add_nonfinite(x, y);
-                    da = S(0.0f);
-                }
-                img.low.add_sample(x, y, lo);
-                img.high.add_sample(x, y, hi);
-                img.da.add_sample(x, y, da);
-                wl.add(double(lo.average()));
-                wh.add(double(hi.average()));
-                wt.add(double(lo.average()) + double(hi.average()));
-                wall_l += b.seconds_low;
-                wall_h += b.seconds_high;
-                rs.c.merge(b.counters);
+                f[f_var].add_rgb(x, y, wt.variance(), wl.variance(), wh.variance());
+                f[f_m2_depth].add_rgb(x, y, wh.variance() + wh.mean() * wh.mean(), depth_n > 0 ? depth_sum / depth_n : 0.0,
+                                      0.0);
             }
-            rs.var_t += wt.variance();
-            rs.var_t2 += wt.variance() * wt.variance();
-            rs.var_l += wl.variance();
-            rs.var_h += wh.variance();
-            rs.m2_h += wh.variance() + wh.mean() * wh.mean();
-            img.pixel_variance.at(x, y, 0) = float(wt.variance());
-            img.pixel_variance.at(x, y, 1) = float(wl.variance());
-            img.pixel_variance.at(x, y, 2) = float(wh.variance());
-            img.pixel_m2_high.at(x, y, 0) = float(wh.variance() + wh.mean() * wh.mean());
-            for (int c = 0; c < 3; ++c) img.switch_depth.at(x, y, c) = depth_n > 0 ? float(depth_sum / depth_n) : 0.0f;
-        }
-        // The row's thread CPU time, split between the two parts in the ratio of their
-        // steady-clock times measured inside the bundles.
-        const double cpu = std::max(0.0, detail::thread_cpu_seconds() - cpu0);
-        const double wall = wall_l + wall_h;
-        rs.sec_l = wall > 0 ? cpu * wall_l / wall : cpu;
-        rs.sec_h = wall > 0 ? cpu * wall_h / wall : 0.0;
-        progress(1);
-    }
+            // The row's thread CPU time, split between the two parts in the ratio of their
+            // steady-clock times measured inside the bundles.
+            const double cpu = std::max(0.0, detail::thread_cpu_seconds() - cpu0);
+            const double wall = wall_l + wall_h;
+            f[f_seconds].add_rgb(0, y, wall > 0 ? cpu * wall_l / wall : cpu, wall > 0 ? cpu * wall_h / wall : 0.0, 0.0);
+            f[f_count_a].add_rgb(0, y, double(rc.paths), double(rc.switched), double(rc.rejected));
+            f[f_count_b].add_rgb(0, y, double(rc.switch_depth), double(rc.da), double(rc.grain_rays));
+        },
+        std::forward<Progress>(progress));
+    // Per-row sums in x order, then rows in order (the same sums for any thread count or resume).
+    auto raw = [&](int k, int x, int y, int c) {
+        return films[std::size_t(k)].sums()[3 * (std::size_t(y) * std::size_t(w) + std::size_t(x)) + std::size_t(c)];
+    };
     double var_t2 = 0;
-    for (const RowStats& rs : rows) {
-        var_t2 += rs.var_t2;
-        img.var_total += rs.var_t;
-        img.var_low += rs.var_l;
-        img.var_high += rs.var_h;
-        img.m2_high += rs.m2_h;
-        img.cpu_seconds_low += rs.sec_l;
-        img.cpu_seconds_high += rs.sec_h;
-        img.counters.merge(rs.c);
+    for (int y = 0; y < h; ++y) {
+        double var_t = 0, var_t2_row = 0, var_l = 0, var_h = 0, m2_h = 0;
+        for (int x = 0; x < w; ++x) {
+            const double vt = raw(f_var, x, y, 0), vl = raw(f_var, x, y, 1), vh = raw(f_var, x, y, 2);
+            const double m2 = raw(f_m2_depth, x, y, 0), depth = raw(f_m2_depth, x, y, 1);
+            var_t += vt;
+            var_t2_row += vt * vt;
+            var_l += vl;
+            var_h += vh;
+            m2_h += m2;
+            img.pixel_variance.at(x, y, 0) = float(vt);
+            img.pixel_variance.at(x, y, 1) = float(vl);
+            img.pixel_variance.at(x, y, 2) = float(vh);
+            img.pixel_m2_high.at(x, y, 0) = float(m2);
+            for (int c = 0; c < 3; ++c) img.switch_depth.at(x, y, c) = float(depth);
+        }
+        var_t2 += var_t2_row;
+        img.var_total += var_t;
+        img.var_low += var_l;
+        img.var_high += var_h;
+        img.m2_high += m2_h;
+        img.cpu_seconds_low += raw(f_seconds, 0, y, 0);
+        img.cpu_seconds_high += raw(f_seconds, 0, y, 1);
+        HybridCounters rc;
+        rc.paths = std::uint64_t(raw(f_count_a, 0, y, 0));
+        rc.switched = std::uint64_t(raw(f_count_a, 0, y, 1));
+        rc.rejected = std::uint64_t(raw(f_count_a, 0, y, 2));
+        rc.switch_depth = std::uint64_t(raw(f_count_b, 0, y, 0));
+        rc.da = std::uint64_t(raw(f_count_b, 0, y, 1));
+        rc.grain_rays = std::uint64_t(raw(f_count_b, 0, y, 2));
+        img.counters.merge(rc);
     }
+    img.low = std::move(films[f_low]);
+    img.high = std::move(films[f_high]);
+    img.da = std::move(films[f_da]);
     const double np = double(w) * double(h);
     img.var_total /= np;
     img.var_total_se = np > 1 ? std::sqrt(std::max(0.0, var_t2 / np - img.var_total * img.var_total) / (np - 1)) : 0.0;
@@ -1026,6 +1064,9 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera>
                                                              int spp, std::uint64_t seed, int threads, HybridOptions opt,
                                                              int stride = 10) {
     opt.acceptance = 1.0;
+    opt.checkpoint = {};  // the preview is short and whole: no checkpoint, no row share
+    opt.row_offset = 0;
+    opt.row_stride = 1;
     const HybridImages pv = render_hybrid(scene_ept, scene_vpt, agg, ctx, camera, spp, seed, threads, opt, stride);
     AcceptanceEstimate a;
     const double np = double(pv.low.width()) * double(pv.low.height()) * double(spp);
