@@ -246,14 +246,7 @@ int main(int argc, char** argv) {
             .num("alpha_s", stats.alpha_s_avg())
             .num("g", stats.g_avg());
         if (source.empty()) {          // the scatterometer ran (not --load)
-            std::vector<double> ranges;  // [begin, end) ray-block range of each rank
-            const auto nb = gl::scatterometer_blocks(cfg.rays);
-            for (int r = 0; r < mpi.size(); ++r) {
-                const auto [b0, b1] = mpi.block_range_of(r, nb);
-                ranges.push_back(double(b0));
-                ranges.push_back(double(b1));
-            }
-            j.nums("rank_blocks", ranges);
+            j.nums("rank_blocks", mpi.block_ranges(gl::scatterometer_blocks(cfg.rays)));  // [begin, end) per rank
         }
         return ex.finish(j);
     });

@@ -135,13 +135,7 @@ int main(int argc, char** argv) {
             .num("captured_min", *std::min_element(captured.begin(), captured.end()))
             .num("captured_max", *std::max_element(captured.begin(), captured.end()));
         j.integer("photons", (long long)photons).num("seconds", secs);
-        std::vector<double> ranges;  // [begin, end) block range of each rank
-        for (int r = 0; r < mpi.size(); ++r) {
-            const auto [r0, r1] = mpi.block_range_of(r, nb);
-            ranges.push_back(double(r0));
-            ranges.push_back(double(r1));
-        }
-        j.nums("rank_blocks", ranges);
+        j.nums("rank_blocks", mpi.block_ranges(nb));  // [begin, end) block range of each rank
         return ex.finish(j);
     });
 }

@@ -200,16 +200,8 @@ int main(int argc, char** argv) {
                 .num("exact_steps_per_path", total.exact_steps / double(tally.paths))
                 .num("nmf_error", nmf_error)
                 .integer("shells", (long long)n_shells);
-        if (shells) {  // [begin, end) shell-sampling path-block range of each rank
-            std::vector<double> ranges;
-            const auto nb = grainlight::shell_sample_blocks(shell_paths);
-            for (int r = 0; r < ex.ranks(); ++r) {
-                const auto [r0, r1] = ex.mpi().block_range_of(r, nb);
-                ranges.push_back(double(r0));
-                ranges.push_back(double(r1));
-            }
-            j.nums("rank_blocks", ranges);
-        }
+        if (shells)  // [begin, end) shell-sampling path-block range of each rank
+            j.nums("rank_blocks", ex.mpi().block_ranges(grainlight::shell_sample_blocks(shell_paths)));
         if (ex.given("out")) {  // optional CSV record of the run
             gl_examples::Csv csv({"albedo", "optical_depth", "g", "ior", "mu0", "paths", "seed", "R", "T", "R_stderr",
                                   "T_stderr"});

@@ -72,6 +72,18 @@ public:
         return {count * rr / k, count * (rr + 1) / k};
     }
 
+    /// Every rank's share of `count` items as [begin_0, end_0, begin_1, end_1, ...] (for the JSON
+    /// summaries' "rank_blocks").
+    [[nodiscard]] std::vector<double> block_ranges(std::uint64_t count) const {
+        std::vector<double> ranges;
+        for (int r = 0; r < size_; ++r) {
+            const auto [b, e] = block_range_of(r, count);
+            ranges.push_back(double(b));
+            ranges.push_back(double(e));
+        }
+        return ranges;
+    }
+
     /// Collect every rank's bytes on rank 0, in rank order (other ranks get an empty list).
     [[nodiscard]] std::vector<std::vector<unsigned char>> gather_bytes(const std::vector<unsigned char>& mine) const {
         std::vector<std::vector<unsigned char>> all;
