@@ -156,7 +156,7 @@ struct BoxBoundary {
 };
 
 /// Union of two shapes (each with classify_box): inside if in either.
-template <class A, class B>
+template <BoundaryShape A, BoundaryShape B>
 struct UnionBoundary {
     /// First shape.
     A a;

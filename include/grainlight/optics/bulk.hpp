@@ -26,6 +26,7 @@
 
 #include "grainlight/core/error.hpp"
 #include "grainlight/core/math.hpp"
+#include "grainlight/core/spectrum.hpp"
 #include "grainlight/optics/goa.hpp"
 #include "grainlight/optics/lorenz_mie.hpp"
 #include "grainlight/optics/particle.hpp"
@@ -87,7 +88,7 @@ struct BulkOptics {
         return MiePhase<F, S>::from_intensities(theta, v);
     }
     /// sigma_t per channel [1/m] (S::size == channels.size()), e.g. for ContinuousMedium.
-    template <class S>
+    template <SpectrumType S>
     [[nodiscard]] S sigma_t_spectrum() const {
         check_argument(S::size == channels.size(), "BulkOptics::sigma_t_spectrum", "Spectrum::size", S::size,
                        "number of wavelengths = " + std::to_string(channels.size()));
@@ -96,7 +97,7 @@ struct BulkOptics {
         return s;
     }
     /// Single-scattering albedo sigma_s / sigma_t per channel.
-    template <class S>
+    template <SpectrumType S>
     [[nodiscard]] S albedo_spectrum() const {
         check_argument(S::size == channels.size(), "BulkOptics::albedo_spectrum", "Spectrum::size", S::size,
                        "number of wavelengths = " + std::to_string(channels.size()));
