@@ -161,3 +161,21 @@ if(TARGET guo21_fig5_mie_vs_goa)
   set_tests_properties(guo21_fig5_mie_vs_goa_bad_radii PROPERTIES PASS_REGULAR_EXPRESSION "radii")
   set_tests_properties(guo21_fig5_mie_vs_goa_json guo21_fig5_mie_vs_goa_bad_radii PROPERTIES LABELS "example;discrete")
 endif()
+
+if(TARGET guo21_fig13_hg_fit)
+  # Guo21 Fig. 13 / Sec. 6.2: HG cannot encode the phase of 1000 um spheres: the tabulated phase's
+  # forward diffraction peak is > 1e3 x HG's (measured 3.5e5) and its primary rainbow (138 deg) > 3x
+  # (measured 6.3); yet by the similarity principle (multiple scattering depends on sigma_s (1 - g))
+  # the HG with the same g gives the mean radiance within 6 % (measured +2.3 +- 0.5 %); the
+  # least-squares fit in ln p has a larger g (it follows the peak).
+  set(_g13out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig13_out)
+  add_test(NAME guo21_fig13_hg_fit_json
+           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:guo21_fig13_hg_fit>
+                   "-DARGS=--quality;quick;--threads;2;--spp;256;--out;${_g13out}"
+                   "-DCHECKS=forward_peak_ratio_tab_over_hg > 1000;rainbow_138_ratio_tab_over_hg > 3;abs(rel_diff_hg_same_g) <= 0.06;g_hg_lsq > g_tabulated;abs(g_tabulated_phase_object - g_tabulated) < 1e-3"
+                   -DEXPECT_FILE=${_g13out}/guo21_fig13_phase.csv
+                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
+  add_test(NAME guo21_fig13_hg_fit_bad_spp COMMAND $<TARGET_FILE:guo21_fig13_hg_fit> --spp 0 --out ${_g13out})
+  set_tests_properties(guo21_fig13_hg_fit_bad_spp PROPERTIES PASS_REGULAR_EXPRESSION "spp")
+  set_tests_properties(guo21_fig13_hg_fit_json guo21_fig13_hg_fit_bad_spp PROPERTIES LABELS "example;discrete")
+endif()
