@@ -179,3 +179,21 @@ if(TARGET guo21_fig13_hg_fit)
   set_tests_properties(guo21_fig13_hg_fit_bad_spp PROPERTIES PASS_REGULAR_EXPRESSION "spp")
   set_tests_properties(guo21_fig13_hg_fit_json guo21_fig13_hg_fit_bad_spp PROPERTIES LABELS "example;discrete")
 endif()
+
+if(TARGET guo21_fig16_query_radius)
+  # Guo21 Fig. 16 / Sec. 6.4: for every k the discrete render has the mean radiance the membership
+  # rule predicts (the continuous medium with each particle's C_t scaled by (1 + r_p/r_c)^2
+  # (1 - e^-c)/c: measured within 3.2 %, bound 8 %); at small k (r_c ~ r_p) that factor is ~2.2 and
+  # the render is > 1.5x brighter than the unscaled continuous pair (measured 2.3x); the factor tends
+  # to 1 as k grows (1.19 at k = 1) and the graininess falls with k (blurred glints).
+  set(_g16out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig16_out)
+  add_test(NAME guo21_fig16_query_radius_json
+           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:guo21_fig16_query_radius>
+                   "-DARGS=--quality;quick;--threads;2;--out;${_g16out}"
+                   "-DCHECKS=max_abs_rel_diff <= 0.08;mean_first_over_continuous > 1.5;factor_first > 2;factor_last < 1.25;graininess_last < graininess_first"
+                   -DEXPECT_FILE=${_g16out}/guo21_fig16_query_radius.csv
+                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
+  add_test(NAME guo21_fig16_query_radius_bad_k COMMAND $<TARGET_FILE:guo21_fig16_query_radius> --k 0 --out ${_g16out})
+  set_tests_properties(guo21_fig16_query_radius_bad_k PROPERTIES PASS_REGULAR_EXPRESSION "--k")
+  set_tests_properties(guo21_fig16_query_radius_json guo21_fig16_query_radius_bad_k PROPERTIES LABELS "example;discrete")
+endif()
