@@ -81,6 +81,9 @@ int main(int argc, char** argv) {
         const std::vector<double> counts =
             ex.opt<std::vector<double>>("counts", {1e4, 1e5, 1e6}, {1e4, 1e5, 1e6, 1e7}, "particle counts");
         const double r_c = ex.opt<double>("query-radius-mm", 2.0, "query-cylinder radius r_c [mm]") * 1e-3;
+        const bool mixture = ex.opt<bool>("mixture", false,
+                                          "on: a two-species cloud (half ice r = 10 um, half eta = 1.5 log-normal r_g = 6 um, "
+                                          "sigma_g = 1.4 in [2, 20] um) against the continuous medium of the mixed bulk properties");
         ex.checkpointable();
         ex.ready();
         const auto& out = ex.out();
@@ -104,9 +107,35 @@ int main(int argc, char** argv) {
 
         // Single-particle optics (the same tables for both media).
         const std::vector<double> wl = {lambda};
-        const gl::BulkOptics bulk = gl::compute_bulk_optics(gl::MonodispersePsd(r_um, 1.0), model, wl);
-        const double C_t = bulk.channels[0].mean_C_t * 1e-12, C_s = bulk.channels[0].mean_C_s * 1e-12;  // m^2
-        const auto phase = bulk.make_phase<float, S>();
+        // Mixture (Guo21 Sec. 7's limitation lifted): a second species of another index and PSD, equal
+        // number shares. Its continuous pair has the mixed bulk properties: sigma_t = n sum_s w_s <C_t>_s
+        // (number-weighted), sigma_s likewise, phase = sum_s w_s <C_s>_s f_s / sum_s w_s <C_s>_s (Eq. 17
+        // over the mixed PSD), all from optics/bulk.hpp on one angle grid.
+        gl::ParticleModel model2;
+        model2.particle_index = {1.5, 0.0};
+        const gl::LogNormalPsd psd2(6.0, 1.4, 2.0, 20.0);
+        const double share2 = mixture ? 0.5 : 0.0;
+        const double r_max_um = mixture ? 20.0 : r_um;
+        gl::BulkSettings bs;  // the mixture's species share one angle grid (that of its largest particle)
+        if (mixture) bs.theta = gl::forward_peaked_theta_grid(2 * gl::pi_v<double> * r_max_um / lambda);
+        const gl::BulkOptics bulk = mixture ? gl::compute_bulk_optics(gl::MonodispersePsd(r_um, 1.0), model, wl, bs)
+                                            : gl::compute_bulk_optics(gl::MonodispersePsd(r_um, 1.0), model, wl);
+        double C_t = bulk.channels[0].mean_C_t * 1e-12, C_s = bulk.channels[0].mean_C_s * 1e-12;  // m^2
+        auto phase = bulk.make_phase<float, S>();
+        double C_t1 = C_t, C_t2 = 0;
+        if (mixture) {
+            const gl::BulkOptics bulk2 = gl::compute_bulk_optics(psd2, model2, wl, bs);
+            const auto& c1 = bulk.channels[0];
+            const auto& c2 = bulk2.channels[0];
+            C_t2 = c2.mean_C_t * 1e-12;
+            C_t = (1 - share2) * c1.mean_C_t * 1e-12 + share2 * c2.mean_C_t * 1e-12;
+            C_s = (1 - share2) * c1.mean_C_s * 1e-12 + share2 * c2.mean_C_s * 1e-12;
+            std::vector<S> mixed(bs.theta.size());
+            for (std::size_t i = 0; i < bs.theta.size(); ++i)
+                mixed[i] = S(float(((1 - share2) * c1.mean_C_s * c1.phase[i] + share2 * c2.mean_C_s * c2.phase[i]) /
+                                   ((1 - share2) * c1.mean_C_s + share2 * c2.mean_C_s)));
+            phase = gl::MiePhase<float, S>::from_intensities(bs.theta, mixed);
+        }
         const double factor = gl::membership_extinction_factor(r_um * 1e-6, r_c, C_t);
 
         std::printf("Guo21 Fig. 14 (Sec. 6.3): ice spheres r = %.0f um in a %.1f m cube, C_t = %.4g um^2, albedo %.4f\n", r_um,
@@ -114,12 +143,16 @@ int main(int argc, char** argv) {
         std::printf("  query radius r_c = %.2f mm (r_c / r_p = %.0f, equivalent k = %.2f at %d px), membership factor "
                     "(1 + r_p/r_c)^2 (1 - e^-c)/c = %.4f\n",
                     r_c * 1e3, r_c / (r_um * 1e-6), k_equiv, width, factor);
+        if (mixture)
+            std::printf("  mixture: %.0f %% ice r = %.0f um (C_t = %.4g um^2) + %.0f %% eta = 1.5 log-normal r_g = 6 um, sigma_g = 1.4 "
+                        "(<C_t> = %.4g um^2); continuous pair: the mixed bulk properties (number-weighted <C_t> = %.4g um^2)\n",
+                        100 * (1 - share2), r_um, C_t1 * 1e12, 100 * share2, C_t2 * 1e12, C_t * 1e12);
 
         gl::RenderOptions opt = gl_examples::render_options(ex, spp, "unused");
         opt.checkpoint = {};  // each render below gets its own checkpoint
         opt.vpt.max_depth = 256;
 
-        std::vector<double> Ns, mean_d, mean_c, rel_diff, rmse, noise, sigmas, mem_pp, secs_d;
+        std::vector<double> sigma_rel, Ns, mean_d, mean_c, rel_diff, rmse, noise, sigmas, mem_pp, secs_d;
         gl_examples::Csv csv({"N", "sigma_t_per_m", "mean_discrete", "mean_continuous", "rel_diff", "rel_rmse",
                               "continuous_noise_rmse", "seconds_discrete", "bytes_per_particle"});
         std::printf("  %10s %10s %13s %13s %9s %9s %9s %8s %8s\n", "N", "sigma_t", "mean_discrete", "mean_contin.", "rel_diff",
@@ -148,13 +181,16 @@ int main(int argc, char** argv) {
             const auto t0 = std::chrono::steady_clock::now();
             auto cloud = std::make_shared<gl::ParticleCloud>(gl::ParticleCloud::generate(
                 gl::BoxBoundary(gl::Vec3d(-0.2, 0.0, -0.2), gl::Vec3d(0.2, 0.4, 0.2)), N,
-                {gl::cloud_species(gl::MonodispersePsd(r_um))}, opt.seed * 7919 + N, 1e6));
+                mixture ? std::vector<gl::CloudSpecies>{gl::cloud_species(gl::MonodispersePsd(r_um), 1 - share2),
+                                                        gl::cloud_species(psd2, share2)}
+                        : std::vector<gl::CloudSpecies>{gl::cloud_species(gl::MonodispersePsd(r_um))},
+                opt.seed * 7919 + N, 1e6));
             gl::ParticleGridSettings gs;
             gs.dilation = r_c;
             // About one particle per voxel, but voxels no smaller than the dilated sphere's diameter
             // (each particle then sits in <= 8 voxels; Sec. 5.3's rule for r_c << voxel).
             const double h1 = std::cbrt(volume / double(N));
-            const double h = std::max(h1, 2 * (r_c + r_um * 1e-6));
+            const double h = std::max(h1, 2 * (r_c + r_max_um * 1e-6));
             const int res = int(std::clamp(std::ceil(side / h), 1.0, 4096.0));
             gs.resolution = {res, res, res};
             auto grid = std::make_shared<gl::ParticleGrid>(*cloud, gs);
@@ -163,7 +199,11 @@ int main(int argc, char** argv) {
             ms.wavelength_um = lambda;
             using DMed = gl::DiscreteParticleMedium<float>;
             gl::Scene<DMed> dsc;
-            build_scene(dsc, dsc.add_medium(DMed(grid, {model}, ms)));
+            build_scene(dsc, dsc.add_medium(DMed(grid, mixture ? std::vector<gl::ParticleModel>{model, model2}
+                                                               : std::vector<gl::ParticleModel>{model},
+                                                 ms)));
+            // The realized cloud's sigma_t (sum C_t / V over its particles) against the bulk's n <C_t>.
+            sigma_rel.push_back(dsc.medium(0).global_sigma_t() / sigma_t - 1);
             const double bytes_pp = double(dsc.medium(0).memory_bytes()) / double(N);
             auto bar_d = ex.progress("discrete N=" + std::to_string(N), std::uint64_t(height));
             gl::RenderOptions optd = opt;
@@ -215,6 +255,16 @@ int main(int argc, char** argv) {
             .num("query_radius_over_particle_radius", r_c / (r_um * 1e-6))
             .num("k_equivalent", k_equiv)
             .num("membership_factor", factor)
+            .integer("mixture", mixture ? 1 : 0)
+            .num("C_t_species1_um2", C_t1 * 1e12)
+            .num("C_t_species2_um2", C_t2 * 1e12)
+            .num("share_species2", share2)
+            .nums("sigma_t_realized_over_bulk_minus_1", sigma_rel)
+            .num("max_abs_sigma_t_realized_over_bulk_minus_1", [&] {
+                double m = 0;
+                for (double v : sigma_rel) m = std::max(m, std::abs(v));
+                return m;
+            }())
             .nums("N", Ns)
             .nums("sigma_t", sigmas)
             .nums("mean_discrete", mean_d)

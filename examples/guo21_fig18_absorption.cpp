@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "common/harness.hpp"
+#include "guo21_cube_scene.hpp"
 #include "grainlight/integrators/discrete_vpt.hpp"
 #include "grainlight/integrators/render.hpp"
 #include "grainlight/media/discrete_particles.hpp"
@@ -46,17 +47,8 @@ using S = gl::Spectrum<1, float>;
 
 namespace {
 
-constexpr double kSide = 1.0;  // cube side [m]
-
-template <class Scene>
-void build_scene(Scene& sc, int medium) {
-    using Mat = gl::Material<float, S>;
-    // Cube [-0.5, 0.5] x [0, 1] x [-0.5, 0.5]; a large dim light 3 m x 3 m at y = 2.25 facing down.
-    sc.add_shape(gl::BoxShape<float>(gl::Vec3f(-0.5f, 0.0f, -0.5f), gl::Vec3f(0.5f, 1.0f, 0.5f)), Mat::index_matched(), medium,
-                 -1);
-    sc.add_quad_light(gl::QuadShape<float>(gl::Vec3f(-1.5f, 2.25f, -1.5f), gl::Vec3f(3.0f, 0, 0), gl::Vec3f(0, 0, 3.0f)),
-                      S(1.25f));
-}
+using guo21_cube::build_scene;
+using guo21_cube::kSide;
 
 std::string tag_of(double eta_i) {
     char buf[32];
@@ -96,8 +88,7 @@ int main(int argc, char** argv) {
             const double r_c = r_c_um * 1e-6, volume = kSide * kSide * kSide;
             const gl::LogNormalPsd psd(r_g, sigma_g, r_min, r_max);
 
-            const gl::PinholeCamera<float> camera(gl::Vec3f(0.0f, 1.375f, 2.75f), gl::Vec3f(0.0f, 0.5f, 0.0f),
-                                                  gl::Vec3f(0, 1, 0), 32.0f, width, height);
+            const gl::PinholeCamera<float> camera = guo21_cube::camera(width, height);
             gl::RenderOptions opt;
             opt.spp = spp;
             opt.threads = ex.threads();
@@ -107,19 +98,12 @@ int main(int argc, char** argv) {
             // One cloud and grid for every eta_i (only the optics change).
             const auto tc0 = std::chrono::steady_clock::now();
             auto cloud = std::make_shared<gl::ParticleCloud>(
-                gl::ParticleCloud::generate(gl::BoxBoundary(gl::Vec3d(-0.5, 0.0, -0.5), gl::Vec3d(0.5, 1.0, 0.5)), count,
+                gl::ParticleCloud::generate(guo21_cube::cube_boundary(), count,
                                             {gl::cloud_species(psd)}, ex.seed() * 7919 + 18, 1e6));
-            gl::ParticleGridSettings gs;
-            gs.dilation = r_c;
-            {
-                // About one particle per voxel, voxels no smaller than the largest dilated sphere's diameter.
-                const double h = std::max(std::cbrt(volume / double(count)), 2 * (r_c + r_max * 1e-6));
-                const int res = int(std::clamp(std::ceil(kSide / h), 1.0, 4096.0));
-                gs.resolution = {res, res, res};
-            }
+            // About one particle per voxel, voxels no smaller than the largest dilated sphere's diameter.
+            const gl::ParticleGridSettings gs = guo21_cube::grid_settings(count, r_c, r_max * 1e-6);
             auto grid = std::make_shared<gl::ParticleGrid>(*cloud, gs);
-            double r_max_cloud = 0;
-            for (std::uint32_t i = 0; i < cloud->size(); ++i) r_max_cloud = std::max(r_max_cloud, double((*cloud)[i].r) * 1e6);
+            const double r_max_cloud = guo21_cube::max_radius_um(*cloud);
             const double build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - tc0).count();
 
             std::printf("Guo21 Fig. 18 (Sec. 6.6): N = %llu particles, eta = %.1f + i eta_i, log-normal r_g = %.0f um, "
@@ -160,13 +144,6 @@ int main(int argc, char** argv) {
                 gl::Scene<DMed> dsc;
                 build_scene(dsc, dsc.add_medium(DMed(grid, {model}, ms)));
                 const DMed& dm = dsc.medium(0);
-                double sum_ct = 0, sum_ctf = 0;  // extinction-weighted membership factor of these particles
-                for (std::uint32_t i = 0; i < cloud->size(); ++i) {
-                    const double ct = double(dm.extinction_cross_section(i));
-                    sum_ct += ct;
-                    sum_ctf += ct * gl::membership_extinction_factor(double((*cloud)[i].r), r_c, ct);
-                }
-                const double factor = sum_ctf / sum_ct;
                 auto bar_d = ex.progress("discrete " + tag_of(eta_i), std::uint64_t(height));
                 const gl::Image di =
                     gl::render_discrete_vpt(dsc, camera, opt, [&](int n) { bar_d.advance(std::uint64_t(n)); }).image();
@@ -176,42 +153,15 @@ int main(int argc, char** argv) {
                 // Continuous pair: the same particles' global sigma_t = sum C_t / V and albedo, and their
                 // ensemble phase function (Eq. 17 as a sum over the realized particles, with the medium's
                 // per-bin optics: sum over bins of (sum of the bin's C_s) f_bin).
+                // The membership rule's Poisson average (extinction-weighted factor) too (guo21_cube_scene.hpp).
                 const auto t1 = std::chrono::steady_clock::now();
-                const double sigma_t = dm.global_sigma_t(), albedo_p = dm.global_sigma_s() / dm.global_sigma_t();
-                const auto& bins = dm.bins(0);
-                std::vector<double> w_bin(bins.size(), 0.0), wf_bin(bins.size(), 0.0);
-                for (std::uint32_t i = 0; i < cloud->size(); ++i) {
-                    const auto* ph = &dm.phase_of(i);
-                    const double ct = double(dm.extinction_cross_section(i));
-                    const double f_i = gl::membership_extinction_factor(double((*cloud)[i].r), r_c, ct);
-                    for (std::size_t b = 0; b < bins.size(); ++b)
-                        if (ph == &bins[b].phase) {
-                            w_bin[b] += double(dm.albedo(i)) * ct;
-                            wf_bin[b] += double(dm.albedo(i)) * ct * f_i;
-                            break;
-                        }
-                }
-                const double x_max = 2 * gl::pi_v<double> * model.host_index * r_max_cloud / lambda;
-                const std::vector<double> theta = gl::forward_peaked_theta_grid(x_max, 400, ms.theta_nodes_tail);
-                std::vector<double> ens(theta.size(), 0.0), ensf(theta.size(), 0.0), inten;
-                for (std::size_t b = 0; b < bins.size(); ++b) {
-                    if (!(w_bin[b] > 0) || !(bins[b].C_s_um2 > 0)) continue;
-                    double ct = 0, cs = 0;
-                    gl::particle_optics(model, bins[b].r_rep_um, lambda, diffraction, theta, ct, cs, inten);
-                    for (std::size_t t = 0; t < theta.size(); ++t) {
-                        ens[t] += w_bin[b] / cs * inten[t];
-                        ensf[t] += wf_bin[b] / cs * inten[t];
-                    }
-                }
-                std::vector<S> ens_s(theta.size()), ensf_s(theta.size());
-                for (std::size_t t = 0; t < theta.size(); ++t) {
-                    ens_s[t] = S(float(ens[t]));
-                    ensf_s[t] = S(float(ensf[t]));
-                }
+                const guo21_cube::ContinuousPair cp =
+                    guo21_cube::continuous_pair(dm, *cloud, model, r_c, lambda, diffraction, r_max_cloud, ms.theta_nodes_tail);
+                const double factor = cp.factor;
+                const double sigma_t = cp.sigma_t, albedo_p = cp.albedo;
                 using CMed = gl::ForcedCollisionMedium<gl::MiePhase<float, S>>;
                 gl::Scene<CMed> csc;
-                build_scene(csc, csc.add_medium(CMed(float(sigma_t), float(albedo_p),
-                                                     gl::MiePhase<float, S>::from_intensities(theta, ens_s))));
+                build_scene(csc, csc.add_medium(CMed(float(sigma_t), float(albedo_p), cp.phase)));
                 auto bar_c = ex.progress("continuous " + tag_of(eta_i), std::uint64_t(height));
                 const gl::Image ci = gl::render_vpt(csc, camera, opt, [&](int n) { bar_c.advance(std::uint64_t(n)); }).image();
                 bar_c.done();
@@ -220,8 +170,7 @@ int main(int argc, char** argv) {
                 // The membership rule's Poisson average: each particle's C_t (and C_s) scaled by
                 // membership_extinction_factor, albedo unchanged.
                 gl::Scene<CMed> fsc;
-                build_scene(fsc, fsc.add_medium(CMed(float(sigma_t * factor), float(albedo_p),
-                                                     gl::MiePhase<float, S>::from_intensities(theta, ensf_s))));
+                build_scene(fsc, fsc.add_medium(CMed(float(sigma_t * factor), float(albedo_p), cp.phase_factor)));
                 const gl::Image cf = gl::render_vpt(fsc, camera, opt, [](int) {}).image();
                 const double md = di.mean(0), mc = ci.mean(0), mcf = cf.mean(0);
                 v_mcf.push_back(mcf);

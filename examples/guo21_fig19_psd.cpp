@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "common/harness.hpp"
+#include "guo21_cube_scene.hpp"
 #include "grainlight/integrators/discrete_vpt.hpp"
 #include "grainlight/integrators/render.hpp"
 #include "grainlight/media/discrete_particles.hpp"
@@ -48,27 +49,9 @@ using S = gl::Spectrum<1, float>;
 
 namespace {
 
-constexpr double kSide = 1.0;  // cube side [m]
-
-template <class Scene>
-void build_scene(Scene& sc, int medium) {
-    using Mat = gl::Material<float, S>;
-    // Cube [-0.5, 0.5] x [0, 1] x [-0.5, 0.5]; a large dim light 3 m x 3 m at y = 2.25 facing down.
-    sc.add_shape(gl::BoxShape<float>(gl::Vec3f(-0.5f, 0.0f, -0.5f), gl::Vec3f(0.5f, 1.0f, 0.5f)), Mat::index_matched(), medium,
-                 -1);
-    sc.add_quad_light(gl::QuadShape<float>(gl::Vec3f(-1.5f, 2.25f, -1.5f), gl::Vec3f(3.0f, 0, 0), gl::Vec3f(0, 0, 3.0f)),
-                      S(1.25f));
-}
-
-double rel_rmse(const gl::Image& a, const gl::Image& b, double mean_b) {
-    double s = 0;
-    const std::size_t n = std::size_t(a.width) * std::size_t(a.height);
-    for (std::size_t i = 0; i < n; ++i) {
-        const double d = double(a.rgb[3 * i]) - double(b.rgb[3 * i]);
-        s += d * d;
-    }
-    return std::sqrt(s / double(n)) / mean_b;
-}
+using guo21_cube::build_scene;
+using guo21_cube::kSide;
+using guo21_cube::rel_rmse;
 
 struct PsdCase {
     std::string name, row;
@@ -98,7 +81,6 @@ int main(int argc, char** argv) {
             const auto& out = ex.out();
             const int height = width * 3 / 4;
             const double r_min = 1, r_max = 2000, lambda = 0.55;
-            const double volume = kSide * kSide * kSide;
             gl::ParticleModel model;
             model.particle_index = {1.31, 0.0};
             const std::vector<double> wl = {lambda};
@@ -120,10 +102,9 @@ int main(int argc, char** argv) {
                                  full ? 5.0 : 1.0});
             }
 
-            const gl::PinholeCamera<float> camera(gl::Vec3f(0.0f, 1.375f, 2.75f), gl::Vec3f(0.0f, 0.5f, 0.0f),
-                                                  gl::Vec3f(0, 1, 0), 32.0f, width, height);
+            const gl::PinholeCamera<float> camera = guo21_cube::camera(width, height);
             // Eq. 23 (read as a length): r_c = k/2 x the pixel footprint at the cube's front (z_med = 2.4 m).
-            const double z_med = 2.4;
+            const double z_med = guo21_cube::kZMed;
             const double r_c = gl::query_radius_eq23(k_q, double(camera.spread_angle()), 1.0, z_med);
             const double r_c_um = r_c * 1e6;
             gl::RenderOptions opt;
@@ -147,15 +128,10 @@ int main(int argc, char** argv) {
                 const auto N = std::uint64_t(double(count) * pc.count_factor);
                 const auto t0 = std::chrono::steady_clock::now();
                 auto cloud = std::make_shared<gl::ParticleCloud>(
-                    gl::ParticleCloud::generate(gl::BoxBoundary(gl::Vec3d(-0.5, 0.0, -0.5), gl::Vec3d(0.5, 1.0, 0.5)), N,
+                    gl::ParticleCloud::generate(guo21_cube::cube_boundary(), N,
                                                 {pc.species}, ex.seed() * 7919 + 19 + c, 1e6));
-                double r_max_cloud = 0;
-                for (std::uint32_t i = 0; i < cloud->size(); ++i) r_max_cloud = std::max(r_max_cloud, double((*cloud)[i].r) * 1e6);
-                gl::ParticleGridSettings gs;
-                gs.dilation = r_c;
-                const double h = std::max(std::cbrt(volume / double(N)), 2 * (r_c + r_max_cloud * 1e-6));
-                const int res = int(std::clamp(std::ceil(kSide / h), 1.0, 4096.0));
-                gs.resolution = {res, res, res};
+                const double r_max_cloud = guo21_cube::max_radius_um(*cloud);
+                const gl::ParticleGridSettings gs = guo21_cube::grid_settings(N, r_c, r_max_cloud * 1e-6);
                 auto grid = std::make_shared<gl::ParticleGrid>(*cloud, gs);
                 gl::DiscreteMediumSettings ms;
                 ms.query_radius = r_c;
@@ -182,42 +158,11 @@ int main(int argc, char** argv) {
 
                 // Continuous pair: the same particles (sum C_t / V, albedo, Eq. 17 over the realized
                 // particles with the medium's per-bin optics), two seeds at 4x spp (its own noise).
-                double sum_ct = 0, sum_ctf = 0;
-                const auto& bins = dm.bins(0);
-                std::vector<double> w_bin(bins.size(), 0.0), wf_bin(bins.size(), 0.0);
-                for (std::uint32_t i = 0; i < cloud->size(); ++i) {
-                    const double ct = double(dm.extinction_cross_section(i));
-                    const double f_i = gl::membership_extinction_factor(double((*cloud)[i].r), r_c, ct);
-                    sum_ct += ct;
-                    sum_ctf += ct * f_i;
-                    const auto* ph = &dm.phase_of(i);
-                    for (std::size_t b = 0; b < bins.size(); ++b)
-                        if (ph == &bins[b].phase) {
-                            w_bin[b] += double(dm.albedo(i)) * ct;
-                            wf_bin[b] += double(dm.albedo(i)) * ct * f_i;
-                            break;
-                        }
-                }
-                const double factor = sum_ctf / sum_ct;
-                const double x_max = 2 * gl::pi_v<double> * model.host_index * r_max_cloud / lambda;
-                const std::vector<double> theta = gl::forward_peaked_theta_grid(x_max, 400, ms.theta_nodes_tail);
-                std::vector<double> ens(theta.size(), 0.0), ensf(theta.size(), 0.0), inten;
-                for (std::size_t b = 0; b < bins.size(); ++b) {
-                    if (!(w_bin[b] > 0) || !(bins[b].C_s_um2 > 0)) continue;
-                    double ct = 0, cs = 0;
-                    gl::particle_optics(model, bins[b].r_rep_um, lambda, diffraction, theta, ct, cs, inten);
-                    for (std::size_t t = 0; t < theta.size(); ++t) {
-                        ens[t] += w_bin[b] / cs * inten[t];
-                        ensf[t] += wf_bin[b] / cs * inten[t];
-                    }
-                }
-                std::vector<S> ens_s(theta.size()), ensf_s(theta.size());
-                for (std::size_t t = 0; t < theta.size(); ++t) {
-                    ens_s[t] = S(float(ens[t]));
-                    ensf_s[t] = S(float(ensf[t]));
-                }
-                const auto phase = gl::MiePhase<float, S>::from_intensities(theta, ens_s);
-                const auto phase_f = gl::MiePhase<float, S>::from_intensities(theta, ensf_s);
+                const guo21_cube::ContinuousPair cp =
+                    guo21_cube::continuous_pair(dm, *cloud, model, r_c, lambda, diffraction, r_max_cloud, ms.theta_nodes_tail);
+                const double factor = cp.factor;
+                const auto& phase = cp.phase;
+                const auto& phase_f = cp.phase_factor;
                 const double g = double(phase.mean_cosine()[0]);
                 const double sigma_t = dm.global_sigma_t(), albedo = dm.global_sigma_s() / sigma_t;
                 using CMed = gl::ForcedCollisionMedium<gl::MiePhase<float, S>>;

@@ -1,0 +1,180 @@
+// guo21_fig20_time_vs_n: Guo21 Fig. 20 / Sec. 6.8, render time of EPT and ours against the particle
+// count N in the CORNELL BOX scene of Fig. 12 (ice spheres of 1000 um, m = 1.31, lambda = 0.55 um;
+// guo21_cornell_scene.hpp). For each N: EPT of explicit dielectric spheres (ExplicitSphereMedium:
+// exact ray-sphere hits through the particle grid + Fresnel), ours (discrete medium with
+// diffraction) and ours -FD (ray optics), all with r_c = r_p / 20 (as guo21_fig12_cornell's EPT
+// comparison), each split into 8 seeded batches: process CPU seconds, the time to unit variance
+// (per-sample variance x CPU seconds per sample, measuring.md) and the means over the pixels that
+// look through the cloud, in one run on the same scene.
+//
+//   guo21_fig20_time_vs_n [--quality quick|full] [--out DIR] [--seed S] [--threads N] [--spp N]
+//                         [--width W] [--counts 1e4,1e5,...] [--rc-over-rp F]
+//
+// Paper: ours ~1.2x faster than EPT at N = 1e5 (Table 1), 2x at N = 1e6, the gain growing with N
+// (Fig. 20; its EPT traverses explicit spheres in a BVH). Last stdout line: JSON with lists N,
+// cpu_seconds_ept / _discrete / _discrete_no_diffraction, time_ratio (EPT / ours, equal spp),
+// ttuv_speedup (EPT / ours, time to unit variance), mean_ept, mean_discrete(_no_diffraction),
+// rel_diff_no_diffraction (ours -FD / EPT - 1) with its standard error, the membership rule's
+// predicted extinction factor, and bytes per particle. Timings are reported, never asserted.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/harness.hpp"
+#include "grainlight/integrators/discrete_vpt.hpp"
+#include "grainlight/media/discrete_particles.hpp"
+#include "grainlight/packing/particle_cloud.hpp"
+#include "grainlight/traversal/particle_grid.hpp"
+#include "guo21_cornell_scene.hpp"
+
+namespace gl = grainlight;
+using S = gl::Spectrum<1, float>;
+
+int main(int argc, char** argv) {
+    return gl_examples::run(
+        argc, argv, "guo21_fig20_time_vs_n", "Guo21 Fig. 20: render time of EPT vs ours against the particle count",
+        "out/guo21_fig20_time_vs_n", [&](gl_examples::Example& ex) -> int {
+            const int spp = ex.opt<int>("spp", 32, 128, "samples per pixel (8 seeded batches)");
+            const int width = ex.opt<int>("width", 32, 128, "image width = height");
+            const std::vector<double> counts = ex.opt<std::vector<double>>("counts", {1e4, 3e4, 1e5, 3e5, 1e6},
+                                                                           {1e4, 3e4, 1e5, 3e5, 1e6, 3e6}, "particle counts");
+            const double rc_over_rp = ex.opt<double>("rc-over-rp", 0.05, "query radius r_c / r_p");
+            ex.ready();
+            if (width < 8 || width > 8192) throw gl_examples::cli_error("--width must be in [8, 8192]");
+            if (spp < 8 || spp > 65536) throw gl_examples::cli_error("--spp must be in [8, 65536]");
+            if (counts.empty()) throw gl_examples::cli_error("--counts needs at least one value");
+            for (double c : counts)
+                if (!(c >= 1 && c <= 1e8)) throw gl_examples::cli_error("--counts values must be in [1, 1e8]");
+            if (!(rc_over_rp > 0 && rc_over_rp <= 10)) throw gl_examples::cli_error("--rc-over-rp must be in (0, 10]");
+            const double r_p = guo21_cornell::kRadiusUm * 1e-6, r_c = rc_over_rp * r_p;
+            const auto camera = guo21_cornell::camera(width);
+            const std::vector<char> mask = guo21_cornell::cloud_mask(camera, width);
+            std::size_t npix = 0;
+            for (const char c : mask) npix += c ? 1 : 0;
+            gl::ParticleModel model;
+            model.particle_index = {1.31, 0.0};
+            gl::RenderOptions opt;
+            opt.spp = spp;
+            opt.threads = ex.threads();
+            opt.seed = ex.seed();
+            opt.vpt.max_depth = 256;
+            const int batches = 8;
+            const double factor = gl::membership_extinction_factor(r_p, r_c, gl::pi_v<double> * r_p * r_p);
+            std::printf("Guo21 Fig. 20 (Sec. 6.8): ice spheres r = %.0f um in the Fig. 12 Cornell box, %dx%d, %d spp, r_c = r_p / %.0f "
+                        "(-FD membership factor %.3f); CPU seconds per render, %d threads\n",
+                        guo21_cornell::kRadiusUm, width, width, spp, 1 / rc_over_rp, factor, ex.threads());
+            std::printf("  %9s %8s %8s %8s %10s %10s %11s %11s %12s %9s %7s\n", "N", "EPT s", "ours s", "-FD s", "EPT/ours",
+                        "EPT/-FD", "ttuv E/ours", "ttuv E/-FD", "-FD vs EPT", "+- 1 se", "B/part");
+            std::vector<double> v_n, v_te, v_to, v_tf, v_ratio, v_ratio_fd, v_tt, v_tt_fd, v_me, v_mo, v_mf, v_rd, v_rd_se, v_rdo, v_bpp;
+            gl_examples::Csv csv({"N", "cpu_seconds_ept", "cpu_seconds_discrete", "cpu_seconds_discrete_no_diffraction",
+                                  "time_ratio", "time_ratio_no_diffraction", "ttuv_speedup", "ttuv_speedup_no_diffraction",
+                                  "mean_ept", "mean_discrete", "mean_discrete_no_diffraction", "rel_diff_no_diffraction",
+                                  "rel_diff_no_diffraction_se", "bytes_per_particle"});
+            for (double Nd : counts) {
+                const auto N = std::uint64_t(Nd);
+                auto cloud = std::make_shared<gl::ParticleCloud>(gl::ParticleCloud::generate(
+                    gl::BoxBoundary(guo21_cornell::kLo, guo21_cornell::kHi), N,
+                    {gl::cloud_species(gl::MonodispersePsd(guo21_cornell::kRadiusUm))}, ex.seed() * 31 + 20 + N, 1e6));
+                const std::string tag = "N=" + std::to_string(N);
+                guo21_cornell::Run ept;
+                {
+                    auto grid = std::make_shared<gl::ParticleGrid>(*cloud, gl::ParticleGridSettings{});
+                    using M = gl::ExplicitSphereMedium<float>;
+                    gl::Scene<M> sc;
+                    guo21_cornell::build_cornell(sc, sc.add_medium(M(grid, 1.31f)), 1.5 * r_p);
+                    ept = guo21_cornell::render_batches(batches, opt, mask, "EPT " + tag, width, [&](const gl::RenderOptions& o, auto&& prog) {
+                        return gl::render_discrete_vpt(sc, camera, o, prog).image();
+                    });
+                }
+                double bytes_pp = 0;
+                auto ours = [&](bool diffraction, const std::string& label) {
+                    gl::ParticleGridSettings gs;
+                    gs.dilation = r_c;
+                    auto grid = std::make_shared<gl::ParticleGrid>(*cloud, gs);
+                    gl::DiscreteMediumSettings ms;
+                    ms.query_radius = r_c;
+                    ms.diffraction = diffraction;
+                    using M = gl::DiscreteParticleMedium<float>;
+                    gl::Scene<M> sc;
+                    guo21_cornell::build_cornell(sc, sc.add_medium(M(grid, {model}, ms)), 1.5 * r_p + r_c);
+                    bytes_pp = double(sc.medium(0).memory_bytes()) / double(N);
+                    return guo21_cornell::render_batches(batches, opt, mask, label + " " + tag, width,
+                                                         [&](const gl::RenderOptions& o, auto&& prog) {
+                                                             return gl::render_discrete_vpt(sc, camera, o, prog).image();
+                                                         });
+                };
+                const auto o = ours(true, "ours");
+                const auto f = ours(false, "ours -FD");
+                const double me = guo21_cornell::masked_mean(ept.img, mask), mo = guo21_cornell::masked_mean(o.img, mask),
+                             mf = guo21_cornell::masked_mean(f.img, mask);
+                const double tt_e = ept.ttuv(npix), tt_o = o.ttuv(npix), tt_f = f.ttuv(npix);
+                const double se = std::hypot(f.mean_se, ept.mean_se) / me;
+                v_n.push_back(double(N));
+                v_te.push_back(ept.cpu_seconds);
+                v_to.push_back(o.cpu_seconds);
+                v_tf.push_back(f.cpu_seconds);
+                v_ratio.push_back(ept.cpu_seconds / o.cpu_seconds);
+                v_ratio_fd.push_back(ept.cpu_seconds / f.cpu_seconds);
+                v_tt.push_back(tt_e / tt_o);
+                v_tt_fd.push_back(tt_e / tt_f);
+                v_me.push_back(me);
+                v_mo.push_back(mo);
+                v_mf.push_back(mf);
+                v_rd.push_back(mf / me - 1);
+                v_rd_se.push_back(se);
+                v_rdo.push_back(mo / me - 1);
+                v_bpp.push_back(bytes_pp);
+                std::printf("  %9.3g %8.2f %8.2f %8.2f %9.2fx %9.2fx %10.2fx %10.2fx %+12.4f %9.4f %7.1f\n", double(N), ept.cpu_seconds,
+                            o.cpu_seconds, f.cpu_seconds, v_ratio.back(), v_ratio_fd.back(), v_tt.back(), v_tt_fd.back(), mf / me - 1,
+                            se, bytes_pp);
+                csv.row({double(N), ept.cpu_seconds, o.cpu_seconds, f.cpu_seconds, v_ratio.back(), v_ratio_fd.back(), v_tt.back(),
+                         v_tt_fd.back(), me, mo, mf, mf / me - 1, se, bytes_pp});
+            }
+            const auto csv_path = ex.csv("guo21_fig20_time_vs_n.csv", csv);
+            ex.plot("guo21_fig20_time_vs_n", csv_path, ex.out() / "guo21_fig20_time_vs_n.png");
+            double max_z = 0;
+            for (std::size_t i = 0; i < v_rd.size(); ++i) max_z = std::max(max_z, std::abs(v_rd[i]) / std::max(v_rd_se[i], 1e-12));
+            std::printf("  paper: EPT / ours = 1.2x at N = 1e5 (Table 1), 2x at N = 1e6 (Fig. 20), growing with N; ours at equal spp: "
+                        "%.2fx .. %.2fx, per unit variance %.2fx .. %.2fx (with diffraction)\n",
+                        *std::min_element(v_ratio.begin(), v_ratio.end()), *std::max_element(v_ratio.begin(), v_ratio.end()),
+                        *std::min_element(v_tt.begin(), v_tt.end()), *std::max_element(v_tt.begin(), v_tt.end()));
+            double max_abs_rd = 0, max_abs_rd_small = 0;
+            for (std::size_t i = 0; i < v_rd.size(); ++i) {
+                max_abs_rd = std::max(max_abs_rd, std::abs(v_rd[i]));
+                if (v_n[i] <= 1e5) max_abs_rd_small = std::max(max_abs_rd_small, std::abs(v_rd[i]));
+            }
+            auto j = ex.summary();
+            j.integer("width", width)
+                .integer("spp", spp)
+                .integer("batches", batches)
+                .num("radius_um", guo21_cornell::kRadiusUm)
+                .num("rc_over_rp", rc_over_rp)
+                .num("predicted_extinction_factor", factor)
+                .nums("N", v_n)
+                .nums("cpu_seconds_ept", v_te)
+                .nums("cpu_seconds_discrete", v_to)
+                .nums("cpu_seconds_discrete_no_diffraction", v_tf)
+                .nums("time_ratio", v_ratio)
+                .nums("time_ratio_no_diffraction", v_ratio_fd)
+                .nums("ttuv_speedup", v_tt)
+                .nums("ttuv_speedup_no_diffraction", v_tt_fd)
+                .nums("mean_ept", v_me)
+                .nums("mean_discrete", v_mo)
+                .nums("mean_discrete_no_diffraction", v_mf)
+                .nums("rel_diff_no_diffraction", v_rd)
+                .nums("rel_diff_no_diffraction_se", v_rd_se)
+                .nums("rel_diff_discrete", v_rdo)
+                .nums("bytes_per_particle", v_bpp)
+                .num("max_abs_rel_diff_no_diffraction", max_abs_rd)
+                .num("max_abs_rel_diff_no_diffraction_n_le_1e5", max_abs_rd_small)
+                .num("max_z_no_diffraction", max_z)
+                .num("bytes_per_particle_max", *std::max_element(v_bpp.begin(), v_bpp.end()))
+                .num("paper_time_ratio_1e5", 1.2)
+                .num("paper_time_ratio_1e6", 2.0)
+                .str("csv", csv_path.string());
+            return ex.finish(j);
+        });
+}
