@@ -7,7 +7,8 @@
 //   moon07_fig12_bowl [--quality quick|full] [--out DIR] [--seed S] [--threads N]
 //        [--spheres N] [--fraction F] [--width W] [--spp-pt N] [--spp-low N] [--spp-high N]
 //        [--batches B] [--min-scatter K] [--switch-depth D] [--light-size S] [--table-albedo A]
-//        [--shell-paths N] [--shell-radii N] [--rebuild-table] [--checkpoint SECONDS] [--resume]
+//        [--shell-paths N] [--shell-radii N] [--rebuild-table] [--no-continuation] [--no-table-nee]
+//        [--checkpoint SECONDS] [--resume]
 //
 // Scene (units: the sphere radius R = 1): the bowl is the lower half of a ball of radius
 // R_b = (2 N / f)^(1/3) (so that it holds N spheres at packing fraction f), filled to its rim
@@ -18,9 +19,10 @@
 // A square light of side 0.3 D (--light-size; Fig. 9's is 0.12 L) at height 1.5 D faces down. The
 // shell table comes from the same random process (cached in DIR); radii r_0 = 2 R .. 0.45 R_b.
 // The table is explicit in every image: paths that hit it bounce (cosine-weighted, weight =
-// albedo), also before the switch; light that leaves the bowl through the shells is not traced
-// further (the shell tracer's escape is the light only), so bowl -> table -> bowl light is in PT
-// but not in the high-order image: part of the printed bias (--table-albedo 0 removes it).
+// albedo, a shadow ray to the light at each bounce: --no-table-nee), also before the switch; a
+// path that leaves the bowl through the shells continues into the scene (the shell tracer's
+// continuation hook: table bounce, re-entry, explicit tracing and shells again), so bowl -> table
+// -> bowl light is in the high-order image too (--no-continuation: lost, about -11 %).
 // Measurement as in moon07_fig9_cube_shadow (batches, ../shared/reference/measuring.md), over
 // the pixels that see the bowl. JSON (last stdout line): seconds_pt, seconds_low, seconds_high,
 // rmse_pt, rmse_shells, speedup_equal_error, mean_pt, mean_shells, exit_rule_bias (= bias_rel,
@@ -48,6 +50,8 @@ int main(int argc, char** argv) {
             .option("table-albedo", "Lambertian albedo of the table, [0, 1)", "0.5")
             .option("no-nee", "high order without Fig. 6's shadow rays (count escapes that hit the light)")
             .option("exit-rule", "exits outside the bowl: radial (Moon07: along y - x) or table (along the sampled T_r direction)", "table")
+            .option("no-continuation", "high order: end shell-traced paths at the bowl's boundary (no table bounce after the shells)")
+            .option("no-table-nee", "no shadow ray at table bounces (paths find the light by hitting it)")
             .option("hand-back", "high order: shells only where they fit, explicit tracing within r_0 of the faces (no exit rule, no shadow rays)")
             .checkpoint_options()
             .common_options("out/moon07_fig12_bowl");
@@ -108,6 +112,8 @@ int main(int argc, char** argv) {
                                       gl::QuadShape<double>(Vec3d(0, 0, -100 * L), Vec3d(L, 0, 0), Vec3d(0, L, 0))};  // no blocker
         scene.cut = true;
         scene.floor_albedo = table_albedo;
+        scene.continuation = !cli.has("no-continuation");
+        scene.table_nee = !cli.has("no-table-nee");
         std::cerr << "moon07_fig12: " << n_in << " sphere centres in a bowl of radius " << Rb << " R (tile of " << n_tile
                   << " spheres, side " << L << " R, f = " << fraction << ")\n";
 
@@ -273,6 +279,8 @@ int main(int argc, char** argv) {
             .boolean("cut_spheres", scene.cut)
             .boolean("exit_rule_table", to.exit_rule == gl::ShellExitRule::table)
             .boolean("hand_back", scene.hand_back)
+            .boolean("continuation", scene.continuation)
+            .boolean("table_nee", scene.table_nee)
             .integer("min_scatter", min_scatter)
             .num("switch_depth", to.switch_depth)
             .integer("spheres", (long long)n_in)
