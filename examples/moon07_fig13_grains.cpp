@@ -232,13 +232,13 @@ int main(int argc, char** argv) {
     return gl_examples::run_main("moon07_fig13_grains", [&]() -> int {
         gl_examples::Cli cli(argc, argv, "moon07_fig13_grains",
                              "Moon07 Fig. 13 with procedural grains: a bowl of grain meshes, explicit path tracing vs low-order EPT + shells");
-        cli.option("grains", "grains in the bowl (Fig. 13: ~10 000 glass Buddhas)", "1500 quick, 10000 full")
+        cli.option("grains", "grains in the bowl (Fig. 13: ~10 000 glass Buddhas)", "3000 quick, 10000 full")
             .option("presets", "exemplar presets (geometry/grains.hpp), comma separated, lossless dielectrics", "sugar,snow")
             .option("mesh-level", "subdivision level of the grain meshes", "2 quick, 3 full")
-            .option("width", "image width (height = 3/4 width)", "48 quick, 160 full")
-            .option("spp-pt", "path-tracing samples per pixel per batch", "16 quick, 32 full")
+            .option("width", "image width (height = 3/4 width)", "64 quick, 160 full")
+            .option("spp-pt", "path-tracing samples per pixel per batch", "32 quick, 32 full")
             .option("spp-low", "low-order samples per pixel per batch", "8 quick, 8 full")
-            .option("spp-high", "high-order (shell) samples per pixel per batch", "4 quick, 8 full")
+            .option("spp-high", "high-order (shell) samples per pixel per batch", "8 quick, 8 full")
             .option("batches", "independent batches per image (>= 4)", "8")
             .option("min-scatter", "switch rule: grain interactions before shells", "3")
             .option("switch-depth", "switch rule: depth below the bowl surface to switch (R; default r_0 = 2)", "2")
@@ -253,14 +253,14 @@ int main(int argc, char** argv) {
         const bool full = cli.full_quality();
         const std::uint64_t seed = cli.seed();
         const int threads = cli.threads();
-        const auto n_grains = std::size_t(cli.integer("grains", full ? 10000 : 1500));
+        const auto n_grains = std::size_t(cli.integer("grains", full ? 10000 : 3000));
         const std::vector<std::string> presets = split_list(cli.str("presets", "sugar,snow"));
         const int level = int(cli.integer("mesh-level", full ? 3 : 2));
-        const int W = int(cli.integer("width", full ? 160 : 48));
+        const int W = int(cli.integer("width", full ? 160 : 64));
         const int H = std::max(1, W * 3 / 4);
-        const int spp_pt = int(cli.integer("spp-pt", full ? 32 : 16));
+        const int spp_pt = int(cli.integer("spp-pt", 32));
         const int spp_low = int(cli.integer("spp-low", 8));
-        const int spp_high = int(cli.integer("spp-high", full ? 8 : 4));
+        const int spp_high = int(cli.integer("spp-high", 8));
         const int B = int(cli.integer("batches", 8));
         const int min_scatter = int(cli.integer("min-scatter", 3));
         const double switch_depth = cli.num("switch-depth", 2.0);
