@@ -582,4 +582,55 @@ void write_image(const std::filesystem::path& dir, const std::string& name, cons
     gl::write_png(dir / (name + ".png"), img, {std::log2(scale)});
 }
 
+/// The three renders of a Moon07 scene example and the summed shell-step tallies of the high order.
+struct ShellPasses {
+    BatchImages pt, lo, hi;   ///< path tracing, low order, high order (shells)
+    gl::ShellTraceStats ts;   ///< tallies of the shell-traced parts (rows rendered by this run)
+};
+
+/// Path tracing (seed), low order (seed + 1) and high order (seed + 2) in B batches each, labelled
+/// "<tag> path tracing", "<tag> low order", "<tag> high order (shells)" (the checkpoint names).
+/// `radiance(ray, rng, mode, stats)` is one camera path (stats: per-thread tallies, high order only).
+template <class Radiance>
+ShellPasses render_shell_passes(const gl::PinholeCamera<double>& cam, int spp_pt, int spp_low, int spp_high, int B,
+                                std::uint64_t seed, int threads, const std::string& tag, Radiance&& radiance,
+                                RenderCheckpoints* checkpoints) {
+    ShellPasses p;
+    p.pt = render_batches(cam, spp_pt, B, seed, threads, tag + " path tracing",
+                          [&](const gl::Ray<double>& r, gl::Rng& rng) { return radiance(r, rng, Mode::pt, nullptr); },
+                          checkpoints);
+    p.lo = render_batches(cam, spp_low, B, seed + 1, threads, tag + " low order",
+                          [&](const gl::Ray<double>& r, gl::Rng& rng) { return radiance(r, rng, Mode::low, nullptr); },
+                          checkpoints);
+    std::vector<gl::ShellTraceStats> tstats(256);  // per thread, summed after the render
+    p.hi = render_batches(cam, spp_high, B, seed + 2, threads, tag + " high order (shells)",
+                          [&](const gl::Ray<double>& r, gl::Rng& rng) {
+#if defined(_OPENMP)
+                              const int tid = std::min(255, omp_get_thread_num());
+#else
+                              const int tid = 0;
+#endif
+                              return radiance(r, rng, Mode::high, &tstats[std::size_t(tid)]);
+                          },
+                          checkpoints);
+    for (const auto& t : tstats) {
+        p.ts.paths += t.paths;
+        p.ts.steps += t.steps;
+        p.ts.scattered += t.scattered;
+        p.ts.exits += t.exits;
+        p.ts.straight_escapes += t.straight_escapes;
+    }
+    return p;
+}
+
+/// The four images <prefix>_{pt,shells,low,high}.exr/.png at the exposure 0.35 / mean_pt.
+inline void write_shell_images(const std::filesystem::path& dir, const std::string& prefix, const ShellVsPt& st, int W,
+                               int H) {
+    const double scale = 0.35 / std::max(1e-12, st.mean_pt);
+    write_image(dir, prefix + "_pt", st.I_pt, W, H, scale);
+    write_image(dir, prefix + "_shells", st.I_sh, W, H, scale);
+    write_image(dir, prefix + "_low", st.I_lo, W, H, scale);
+    write_image(dir, prefix + "_high", st.I_hi, W, H, scale);
+}
+
 }  // namespace

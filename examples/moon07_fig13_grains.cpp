@@ -375,39 +375,18 @@ int main(int argc, char** argv) {
         if (n_mask < 16) throw std::runtime_error("the camera sees fewer than 16 bowl pixels");
 
         RenderCheckpoints checkpoints{&cli, out, "moon07_fig13_grains", {}};
-        const gl::ShellTracer<S1, BowlVolume>* none = nullptr;
-        const BatchImages pt = render_batches(cam, spp_pt, B, seed, threads, "fig13 path tracing",
-                                              [&](const gl::Ray<double>& r, gl::Rng& rng) {
-                                                  return scene.radiance(r, rng, Mode::pt, none);
-                                              }, &checkpoints);
-        const BatchImages lo = render_batches(cam, spp_low, B, seed + 1, threads, "fig13 low order",
-                                              [&](const gl::Ray<double>& r, gl::Rng& rng) {
-                                                  return scene.radiance(r, rng, Mode::low, &tracer);
-                                              }, &checkpoints);
-        std::vector<gl::ShellTraceStats> tstats(256);
-        const BatchImages hi = render_batches(cam, spp_high, B, seed + 2, threads, "fig13 high order (shells)",
-                                              [&](const gl::Ray<double>& r, gl::Rng& rng) {
-#if defined(_OPENMP)
-                                                  const int tid = std::min(255, omp_get_thread_num());
-#else
-                                                  const int tid = 0;
-#endif
-                                                  return scene.radiance(r, rng, Mode::high, &tracer, &tstats[std::size_t(tid)]);
-                                              }, &checkpoints);
-        gl::ShellTraceStats ts;
-        for (const auto& t : tstats) {
-            ts.paths += t.paths;
-            ts.steps += t.steps;
-            ts.exits += t.exits;
-        }
+        const ShellPasses passes = render_shell_passes(
+            cam, spp_pt, spp_low, spp_high, B, seed, threads, "fig13",
+            [&](const gl::Ray<double>& r, gl::Rng& rng, Mode m, gl::ShellTraceStats* s) {
+                return scene.radiance(r, rng, m, &tracer, s);
+            },
+            &checkpoints);
+        const BatchImages &pt = passes.pt, &lo = passes.lo, &hi = passes.hi;
+        const gl::ShellTraceStats& ts = passes.ts;
         const double high_samples = double(spp_high) * B * double(n_mask);
         const ShellVsPt st = compare_shells_to_pt(pt, lo, hi, mask);
 
-        const double scale = 0.35 / std::max(1e-12, st.mean_pt);
-        write_image(out, "moon07_fig13_pt", st.I_pt, W, H, scale);
-        write_image(out, "moon07_fig13_shells", st.I_sh, W, H, scale);
-        write_image(out, "moon07_fig13_low", st.I_lo, W, H, scale);
-        write_image(out, "moon07_fig13_high", st.I_hi, W, H, scale);
+        write_shell_images(out, "moon07_fig13", st, W, H);
         gl_examples::Csv csv({"seconds_pt", "seconds_low", "seconds_high", "speedup_equal_error", "mean_pt", "mean_shells",
                               "rmse_pt", "rmse_shells", "bias_rel"});
         csv.row({pt.cpu, lo.cpu, hi.cpu, st.speedup, st.mean_pt, st.mean_sh, st.rmse_pt, st.rmse_sh, st.bias_rel});
