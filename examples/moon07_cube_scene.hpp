@@ -148,6 +148,45 @@ struct VolumeScene {
     [[nodiscard]] Vec3d face_normal(const Vec3d& p) const noexcept { return volume_normal(cube, p); }
     double clock_mean = 2.0;  ///< mean path length between switch candidates (R)
     bool hand_back = false;   ///< high order: shells only where they fit, explicit tracing near the faces
+    /// High order: a shell-traced path that leaves the volume continues into the scene (table
+    /// bounce, its shadow ray, re-entry, shells again: the tracer's continuation hook) instead of
+    /// ending at the boundary.
+    bool continuation = false;
+    bool table_nee = true;       ///< a shadow ray to the light at every table bounce (when floor_albedo > 0)
+    int max_continuations = 16;  ///< a path leaves the volume through the shells at most this often
+
+    /// Where radiance_from starts a path: the state it carries over from before.
+    struct PathStart {
+        int events = 0;              ///< explicit events so far (switch rule)
+        bool handed = false;         ///< high order: the path has been through the shells (its light counts)
+        bool skip_emission = false;  ///< the first segment's emission was estimated by a shadow ray
+        int floor_bounces = 0;       ///< table bounces so far
+        int continuations = 0;       ///< exits from the shells so far
+    };
+
+    /// The shell tracer's Env with the continuation hook (ShellContinuationEnv): a path that leaves
+    /// the volume goes on through radiance_from (high order, its light counted).
+    template <class Tracer>
+    struct ContinuationEnv {
+        const VolumeScene* scene;
+        const Tracer* tracer;
+        gl::ShellTraceStats* ts;
+        PathStart start;
+        [[nodiscard]] gl::LightSample<double, S1> sample_light(const Vec3d& p, const Vec3d& u) const noexcept {
+            return scene->sample_light(p, u);
+        }
+        [[nodiscard]] bool visible(const Vec3d& p, const Vec3d& w, double dist) const noexcept {
+            return scene->visible(p, w, dist);
+        }
+        [[nodiscard]] S1 escape(const gl::Ray<double>& r) const noexcept { return scene->escape(r); }
+        [[nodiscard]] S1 continue_outside(const gl::Ray<double>& r, gl::Rng& rng, bool direct_counted) const noexcept {
+            if (start.continuations > scene->max_continuations) return S1(0.0);
+            PathStart s = start;
+            s.skip_emission = direct_counted;
+            return S1(scene->radiance_from(r.o + 1e-9 * scene->tile.radius() * r.d, r.d, rng, Mode::high, tracer,
+                                           nullptr, ts, s));
+        }
+    };
 
     // --- the scene outside the medium (also the Env of the shell tracer) ---
     /// Radiance along a ray outside the cube: the light's front side, else black (blocker,
@@ -205,17 +244,30 @@ struct VolumeScene {
     template <class Tracer>
     [[nodiscard]] double radiance(gl::Ray<double> r, gl::Rng& rng, Mode mode, const Tracer* tracer,
                                   std::uint64_t* events_out = nullptr, gl::ShellTraceStats* ts = nullptr) const noexcept {
-        Vec3d p = r.o, d = r.d;
+        return radiance_from(r.o, r.d, rng, mode, tracer, events_out, ts, PathStart{});
+    }
+
+    /// radiance() of a path at p (outside the volume) along unit d with the state `s0` (the
+    /// continuation hook starts paths here where they leave the shells).
+    template <class Tracer>
+    [[nodiscard]] double radiance_from(Vec3d p, Vec3d d, gl::Rng& rng, Mode mode, const Tracer* tracer,
+                                       std::uint64_t* events_out, gl::ShellTraceStats* ts,
+                                       const PathStart& s0) const noexcept {
         bool in_cube = false, in_glass = false, has_last = false;
         Vec3d c(0.0);
-        int events = 0;
+        int events = s0.events;
         double clock = -1;  // path length to the next switch candidate (< 0: draw)
-        bool handed = false;  // high order, hand-back mode: the path came back from the shells
-        double beta = 1;      // throughput factor from the shells (hand-back mode)
+        bool handed = s0.handed;  // high order: the path came back from the shells
+        double beta = 1;      // throughput factor from the shells (hand-back mode) and the table
+        double acc = 0;       // light gathered by the table's shadow rays
+        bool skip = s0.skip_emission;  // the next outside segment's emission is a shadow ray's
         const double R = tile.radius();
-        int floor_bounces = 0;
+        int floor_bounces = s0.floor_bounces;
         for (int guard = 0; guard < max_events; ++guard) {
             if (!in_cube) {
+                const bool skip_segment = skip;
+                skip = false;
+                const bool counting = mode != Mode::high || handed;
                 const gl::Ray<double> ray(p, d);
                 const double tc = cube_entry(ray);
                 bool enters = false;
@@ -226,13 +278,23 @@ struct VolumeScene {
                     ++floor_bounces;
                     p = ray(tf);
                     p.z = 1e-9 * R;
+                    if (table_nee) {
+                        // Shadow ray to the light: the direct segment (not through the volume, whose
+                        // light is found by the path); the bounce direction's direct hit is then skipped.
+                        const gl::LightSample<double, S1> ls =
+                            sample_light(p, Vec3d(rng.uniform<double>(), rng.uniform<double>(), 0.0));
+                        if (counting && ls && ls.w.z > 0 && visible(p, ls.w, ls.dist) &&
+                            !(cube_entry(gl::Ray<double>(p, ls.w)) < ls.dist))
+                            acc += beta * floor_albedo * ls.w.z / gl::pi_v<double> * ls.L[0] / ls.pdf;
+                        skip = true;
+                    }
                     d = gl::sample_cosine_hemisphere(gl::Vec2d(rng.uniform<double>(), rng.uniform<double>()));
                     beta *= floor_albedo;
                     continue;
                 }
                 if (!enters) {
                     if (events_out) *events_out += std::uint64_t(events);
-                    return mode == Mode::high && !handed ? 0.0 : beta * Le;
+                    return counting && !skip_segment ? acc + beta * Le : acc;
                 }
                 p += tc * d;
                 in_cube = true;
@@ -318,12 +380,18 @@ struct VolumeScene {
                     const Vec3d x = p + along * d;
                     if (tracer->may_switch(x, events)) {
                         if (events_out && !hand_back) *events_out += std::uint64_t(events);
-                        if (mode == Mode::low) return 0.0;
-                        if (!hand_back) return beta * tracer->trace(x, d, rng, *this, ts)[0];
+                        if (mode == Mode::low) return acc;
+                        if (!hand_back && !continuation) return acc + beta * tracer->trace(x, d, rng, *this, ts)[0];
+                        if (!hand_back)  // continuation hook: a path leaving the shells goes on in the scene
+                            return acc + beta * tracer->trace(x, d, rng,
+                                                              ContinuationEnv<Tracer>{this, tracer, ts,
+                                                                                      PathStart{events, true, false, floor_bounces,
+                                                                                                s0.continuations + 1}},
+                                                              ts)[0];
                         // Hand-back mode: shells where they fit, then explicit tracing again from
                         // the hand-back point in the scene's own spheres (glass if it lies in one).
                         const gl::ShellHandBack<S1> hb = tracer->trace_to_boundary(x, d, rng, ts);
-                        if (!hb.handed_back) return 0.0;
+                        if (!hb.handed_back) return acc;
                         handed = true;
                         beta *= hb.beta;
                         p = hb.x;
@@ -365,7 +433,7 @@ struct VolumeScene {
             ++events;
         }
         if (events_out) *events_out += std::uint64_t(events);
-        return 0.0;
+        return acc;
     }
 };
 
@@ -512,6 +580,57 @@ void write_image(const std::filesystem::path& dir, const std::string& name, cons
             for (int ch = 0; ch < 3; ++ch) img.at(x, y, ch) = float(v[std::size_t(y) * std::size_t(W) + std::size_t(x)]);
     gl::write_exr(dir / (name + ".exr"), img);
     gl::write_png(dir / (name + ".png"), img, {std::log2(scale)});
+}
+
+/// The three renders of a Moon07 scene example and the summed shell-step tallies of the high order.
+struct ShellPasses {
+    BatchImages pt, lo, hi;   ///< path tracing, low order, high order (shells)
+    gl::ShellTraceStats ts;   ///< tallies of the shell-traced parts (rows rendered by this run)
+};
+
+/// Path tracing (seed), low order (seed + 1) and high order (seed + 2) in B batches each, labelled
+/// "<tag> path tracing", "<tag> low order", "<tag> high order (shells)" (the checkpoint names).
+/// `radiance(ray, rng, mode, stats)` is one camera path (stats: per-thread tallies, high order only).
+template <class Radiance>
+ShellPasses render_shell_passes(const gl::PinholeCamera<double>& cam, int spp_pt, int spp_low, int spp_high, int B,
+                                std::uint64_t seed, int threads, const std::string& tag, Radiance&& radiance,
+                                RenderCheckpoints* checkpoints) {
+    ShellPasses p;
+    p.pt = render_batches(cam, spp_pt, B, seed, threads, tag + " path tracing",
+                          [&](const gl::Ray<double>& r, gl::Rng& rng) { return radiance(r, rng, Mode::pt, nullptr); },
+                          checkpoints);
+    p.lo = render_batches(cam, spp_low, B, seed + 1, threads, tag + " low order",
+                          [&](const gl::Ray<double>& r, gl::Rng& rng) { return radiance(r, rng, Mode::low, nullptr); },
+                          checkpoints);
+    std::vector<gl::ShellTraceStats> tstats(256);  // per thread, summed after the render
+    p.hi = render_batches(cam, spp_high, B, seed + 2, threads, tag + " high order (shells)",
+                          [&](const gl::Ray<double>& r, gl::Rng& rng) {
+#if defined(_OPENMP)
+                              const int tid = std::min(255, omp_get_thread_num());
+#else
+                              const int tid = 0;
+#endif
+                              return radiance(r, rng, Mode::high, &tstats[std::size_t(tid)]);
+                          },
+                          checkpoints);
+    for (const auto& t : tstats) {
+        p.ts.paths += t.paths;
+        p.ts.steps += t.steps;
+        p.ts.scattered += t.scattered;
+        p.ts.exits += t.exits;
+        p.ts.straight_escapes += t.straight_escapes;
+    }
+    return p;
+}
+
+/// The four images <prefix>_{pt,shells,low,high}.exr/.png at the exposure 0.35 / mean_pt.
+inline void write_shell_images(const std::filesystem::path& dir, const std::string& prefix, const ShellVsPt& st, int W,
+                               int H) {
+    const double scale = 0.35 / std::max(1e-12, st.mean_pt);
+    write_image(dir, prefix + "_pt", st.I_pt, W, H, scale);
+    write_image(dir, prefix + "_shells", st.I_sh, W, H, scale);
+    write_image(dir, prefix + "_low", st.I_lo, W, H, scale);
+    write_image(dir, prefix + "_high", st.I_hi, W, H, scale);
 }
 
 }  // namespace

@@ -7,7 +7,8 @@
 //   moon07_fig12_bowl [--quality quick|full] [--out DIR] [--seed S] [--threads N]
 //        [--spheres N] [--fraction F] [--width W] [--spp-pt N] [--spp-low N] [--spp-high N]
 //        [--batches B] [--min-scatter K] [--switch-depth D] [--light-size S] [--table-albedo A]
-//        [--shell-paths N] [--shell-radii N] [--rebuild-table] [--checkpoint SECONDS] [--resume]
+//        [--shell-paths N] [--shell-radii N] [--rebuild-table] [--no-continuation] [--no-table-nee]
+//        [--checkpoint SECONDS] [--resume]
 //
 // Scene (units: the sphere radius R = 1): the bowl is the lower half of a ball of radius
 // R_b = (2 N / f)^(1/3) (so that it holds N spheres at packing fraction f), filled to its rim
@@ -18,9 +19,10 @@
 // A square light of side 0.3 D (--light-size; Fig. 9's is 0.12 L) at height 1.5 D faces down. The
 // shell table comes from the same random process (cached in DIR); radii r_0 = 2 R .. 0.45 R_b.
 // The table is explicit in every image: paths that hit it bounce (cosine-weighted, weight =
-// albedo), also before the switch; light that leaves the bowl through the shells is not traced
-// further (the shell tracer's escape is the light only), so bowl -> table -> bowl light is in PT
-// but not in the high-order image: part of the printed bias (--table-albedo 0 removes it).
+// albedo, a shadow ray to the light at each bounce: --no-table-nee), also before the switch; a
+// path that leaves the bowl through the shells continues into the scene (the shell tracer's
+// continuation hook: table bounce, re-entry, explicit tracing and shells again), so bowl -> table
+// -> bowl light is in the high-order image too (--no-continuation: lost, about -11 %).
 // Measurement as in moon07_fig9_cube_shadow (batches, ../shared/reference/measuring.md), over
 // the pixels that see the bowl. JSON (last stdout line): seconds_pt, seconds_low, seconds_high,
 // rmse_pt, rmse_shells, speedup_equal_error, mean_pt, mean_shells, exit_rule_bias (= bias_rel,
@@ -48,6 +50,8 @@ int main(int argc, char** argv) {
             .option("table-albedo", "Lambertian albedo of the table, [0, 1)", "0.5")
             .option("no-nee", "high order without Fig. 6's shadow rays (count escapes that hit the light)")
             .option("exit-rule", "exits outside the bowl: radial (Moon07: along y - x) or table (along the sampled T_r direction)", "table")
+            .option("no-continuation", "high order: end shell-traced paths at the bowl's boundary (no table bounce after the shells)")
+            .option("no-table-nee", "no shadow ray at table bounces (paths find the light by hitting it)")
             .option("hand-back", "high order: shells only where they fit, explicit tracing within r_0 of the faces (no exit rule, no shadow rays)")
             .checkpoint_options()
             .common_options("out/moon07_fig12_bowl");
@@ -108,6 +112,8 @@ int main(int argc, char** argv) {
                                       gl::QuadShape<double>(Vec3d(0, 0, -100 * L), Vec3d(L, 0, 0), Vec3d(0, L, 0))};  // no blocker
         scene.cut = true;
         scene.floor_albedo = table_albedo;
+        scene.continuation = !cli.has("no-continuation");
+        scene.table_nee = !cli.has("no-table-nee");
         std::cerr << "moon07_fig12: " << n_in << " sphere centres in a bowl of radius " << Rb << " R (tile of " << n_tile
                   << " spheres, side " << L << " R, f = " << fraction << ")\n";
 
@@ -180,35 +186,14 @@ int main(int argc, char** argv) {
         // finishes so a resumed run skips it, all removed at the end of a completed run; the shell
         // passes' step tallies count only the rows rendered by the resumed run) ---
         RenderCheckpoints checkpoints{&cli, out, "moon07_fig12_bowl", {}};
-        const gl::ShellTracer<S1, BowlVolume>* none = nullptr;
-        const BatchImages pt = render_batches(cam, spp_pt, B, seed, threads, "fig12 path tracing",
-                                              [&](const gl::Ray<double>& r, gl::Rng& rng) {
-                                                  return scene.radiance(r, rng, Mode::pt, none);
-                                              }, &checkpoints);
-        const BatchImages lo = render_batches(cam, spp_low, B, seed + 1, threads, "fig12 low order",
-                                              [&](const gl::Ray<double>& r, gl::Rng& rng) {
-                                                  return scene.radiance(r, rng, Mode::low, &tracer);
-                                              }, &checkpoints);
-        // Per-thread tallies of the shell-traced parts (summed after the render).
-        std::vector<gl::ShellTraceStats> tstats(256);
-        const BatchImages hi = render_batches(cam, spp_high, B, seed + 2, threads, "fig12 high order (shells)",
-                                              [&](const gl::Ray<double>& r, gl::Rng& rng) {
-#if defined(_OPENMP)
-                                                  const int tid = std::min(255, omp_get_thread_num());
-#else
-                                                  const int tid = 0;
-#endif
-                                                  return scene.radiance(r, rng, Mode::high, &tracer, nullptr,
-                                                                        &tstats[std::size_t(tid)]);
-                                              }, &checkpoints);
-        gl::ShellTraceStats ts;
-        for (const auto& t : tstats) {
-            ts.paths += t.paths;
-            ts.steps += t.steps;
-            ts.scattered += t.scattered;
-            ts.exits += t.exits;
-            ts.straight_escapes += t.straight_escapes;
-        }
+        const ShellPasses passes = render_shell_passes(
+            cam, spp_pt, spp_low, spp_high, B, seed, threads, "fig12",
+            [&](const gl::Ray<double>& r, gl::Rng& rng, Mode m, gl::ShellTraceStats* s) {
+                return scene.radiance(r, rng, m, &tracer, nullptr, s);
+            },
+            &checkpoints);
+        const BatchImages &pt = passes.pt, &lo = passes.lo, &hi = passes.hi;
+        const gl::ShellTraceStats& ts = passes.ts;
         const double high_samples = double(spp_high) * B * double(n_mask);
 
         // --- statistics over the bowl pixels (compare_shells_to_pt, moon07_cube_scene.hpp) ---
@@ -217,14 +202,9 @@ int main(int argc, char** argv) {
                      mse_sh_pixelwise = st.mse_sh_pixelwise, rmse_pt = st.rmse_pt, rmse_sh = st.rmse_sh,
                      bias_rel = st.bias_rel, bias_rel_se = st.bias_rel_se, speedup = st.speedup,
                      ttuv_ratio = st.ttuv_ratio, nm = st.nm;
-        const std::vector<double> &I_pt = st.I_pt, &I_lo = st.I_lo, &I_hi = st.I_hi, &I_sh = st.I_sh;
 
         // --- outputs ---
-        const double scale = 0.35 / std::max(1e-12, mean_pt);
-        write_image(out, "moon07_fig12_pt", I_pt, W, H, scale);
-        write_image(out, "moon07_fig12_shells", I_sh, W, H, scale);
-        write_image(out, "moon07_fig12_low", I_lo, W, H, scale);
-        write_image(out, "moon07_fig12_high", I_hi, W, H, scale);
+        write_shell_images(out, "moon07_fig12", st, W, H);
         // Ours (CPU s) beside the paper's (minutes on a 128-CPU cluster, as CPU s).
         gl_examples::Csv csv({"seconds_pt", "seconds_low", "seconds_high", "speedup_equal_error", "mean_pt",
                               "mean_shells", "rmse_pt", "rmse_shells", "bias_rel"});
@@ -273,6 +253,8 @@ int main(int argc, char** argv) {
             .boolean("cut_spheres", scene.cut)
             .boolean("exit_rule_table", to.exit_rule == gl::ShellExitRule::table)
             .boolean("hand_back", scene.hand_back)
+            .boolean("continuation", scene.continuation)
+            .boolean("table_nee", scene.table_nee)
             .integer("min_scatter", min_scatter)
             .num("switch_depth", to.switch_depth)
             .integer("spheres", (long long)n_in)

@@ -181,35 +181,14 @@ int main(int argc, char** argv) {
         // finishes so a resumed run skips it, all removed at the end of a completed run; the shell
         // passes' step tallies count only the rows rendered by the resumed run) ---
         RenderCheckpoints checkpoints{&cli, out, "moon07_fig9_cube_shadow", {}};
-        const gl::ShellTracer<S1, gl::BoxDistance>* none = nullptr;
-        const BatchImages pt = render_batches(cam, spp_pt, B, seed, threads, "fig9 path tracing",
-                                              [&](const gl::Ray<double>& r, gl::Rng& rng) {
-                                                  return scene.radiance(r, rng, Mode::pt, none);
-                                              }, &checkpoints);
-        const BatchImages lo = render_batches(cam, spp_low, B, seed + 1, threads, "fig9 low order",
-                                              [&](const gl::Ray<double>& r, gl::Rng& rng) {
-                                                  return scene.radiance(r, rng, Mode::low, &tracer);
-                                              }, &checkpoints);
-        // Per-thread tallies of the shell-traced parts (summed after the render).
-        std::vector<gl::ShellTraceStats> tstats(256);
-        const BatchImages hi = render_batches(cam, spp_high, B, seed + 2, threads, "fig9 high order (shells)",
-                                              [&](const gl::Ray<double>& r, gl::Rng& rng) {
-#if defined(_OPENMP)
-                                                  const int tid = std::min(255, omp_get_thread_num());
-#else
-                                                  const int tid = 0;
-#endif
-                                                  return scene.radiance(r, rng, Mode::high, &tracer, nullptr,
-                                                                        &tstats[std::size_t(tid)]);
-                                              }, &checkpoints);
-        gl::ShellTraceStats ts;
-        for (const auto& t : tstats) {
-            ts.paths += t.paths;
-            ts.steps += t.steps;
-            ts.scattered += t.scattered;
-            ts.exits += t.exits;
-            ts.straight_escapes += t.straight_escapes;
-        }
+        const ShellPasses passes = render_shell_passes(
+            cam, spp_pt, spp_low, spp_high, B, seed, threads, "fig9",
+            [&](const gl::Ray<double>& r, gl::Rng& rng, Mode m, gl::ShellTraceStats* s) {
+                return scene.radiance(r, rng, m, &tracer, nullptr, s);
+            },
+            &checkpoints);
+        const BatchImages &pt = passes.pt, &lo = passes.lo, &hi = passes.hi;
+        const gl::ShellTraceStats& ts = passes.ts;
         const double high_samples = double(spp_high) * B * double(n_mask);
 
         // --- statistics over the cube pixels (compare_shells_to_pt, moon07_cube_scene.hpp) ---
@@ -218,14 +197,9 @@ int main(int argc, char** argv) {
                      mse_sh_pixelwise = st.mse_sh_pixelwise, rmse_pt = st.rmse_pt, rmse_sh = st.rmse_sh,
                      bias_rel = st.bias_rel, bias_rel_se = st.bias_rel_se, speedup = st.speedup,
                      ttuv_ratio = st.ttuv_ratio, nm = st.nm;
-        const std::vector<double> &I_pt = st.I_pt, &I_lo = st.I_lo, &I_hi = st.I_hi, &I_sh = st.I_sh;
 
         // --- outputs ---
-        const double scale = 0.35 / std::max(1e-12, mean_pt);
-        write_image(out, "moon07_fig9_pt", I_pt, W, H, scale);
-        write_image(out, "moon07_fig9_shells", I_sh, W, H, scale);
-        write_image(out, "moon07_fig9_low", I_lo, W, H, scale);
-        write_image(out, "moon07_fig9_high", I_hi, W, H, scale);
+        write_shell_images(out, "moon07_fig9", st, W, H);
         // Ours (CPU s) beside the paper's (minutes on a 128-CPU cluster, as CPU s).
         gl_examples::Csv csv({"seconds_pt", "seconds_low", "seconds_high", "speedup_equal_error", "mean_pt",
                               "mean_shells", "rmse_pt", "rmse_shells", "bias_rel"});

@@ -382,6 +382,52 @@ TEST_CASE("Index-matched absorbing spheres: absorption within the stereological 
     CHECK_THROWS_AS(SpherePackingShellSource(tile, 1.5, 0.0, 0.0), invalid_argument);
 }
 
+TEST_CASE("Grain-aggregate shell source == explicit sphere source for glass-bead grains", "[shells][aggregate]") {
+    // Two independent tracers of the same transport: GrainAggregateShellSource (Meng15 aggregate:
+    // Algorithm 1 traversal, grain_sojourn, analytic sphere exemplar of the glass-bead preset,
+    // eta = 1.5) and SpherePackingShellSource (the tile's own first_hit and Fresnel events) over
+    // the same periodic packing, frames anywhere along the path (frames_in_grains). Per shell:
+    // p_unscattered and p_scattered within 4 sigma, mean exit cos theta_1 within 4 sigma.
+    Rng prng = Rng::from_key(7);
+    const PeriodicTile tile = random_sequential_addition(128, 0.3, prng, 1.0);
+    const double R = tile.radius();
+    using B = EverywhereBoundary;
+    const GranularAggregate<B> agg(tile, VoxelizedBoundary<B>({}, tile.side()),
+                                   {Grain::from_preset(grain_preset("glass-bead"))}, {1.0}, 5);
+    const std::vector<double> radii{2 * R, 4 * R, 8 * R};
+    const std::uint64_t n = 12000;
+    const ShellSamples a =
+        collect_shell_samples(GrainAggregateShellSource<B>(agg, 10 * R, 1000000, true), radii, n, 11, 64, 8 * R);
+    const ShellSamples e = collect_shell_samples(SpherePackingShellSource(tile, 1.5, 0.0, 10 * R), radii, n, 12, 64, 8 * R);
+    for (std::size_t i = 0; i < radii.size(); ++i) {
+        const double pua = double(a.n_unscattered[i]) / double(n), pue = double(e.n_unscattered[i]) / double(n);
+        const double psa = double(a.n_scattered(i)) / double(n), pse = double(e.n_scattered(i)) / double(n);
+        Welford ca, ce;
+        for (std::size_t k = 0; k < a.coords[i].size(); k += 3) ca.add(a.coords[i][k]);
+        for (std::size_t k = 0; k < e.coords[i].size(); k += 3) ce.add(e.coords[i][k]);
+        INFO("shell r = " << radii[i] / R << " R: unscattered " << pua << " vs " << pue << ", scattered " << psa << " vs "
+                          << pse << ", mean cos theta_1 " << ca.mean() << " vs " << ce.mean());
+        const double se_u = std::sqrt((pua * (1 - pua) + pue * (1 - pue)) / double(n));
+        const double se_s = std::sqrt((psa * (1 - psa) + pse * (1 - pse)) / double(n));
+        CHECK(std::abs(pua - pue) <= 4 * se_u + 1e-9);
+        CHECK(std::abs(psa - pse) <= 4 * se_s + 1e-9);
+        CHECK(std::abs(ca.mean() - ce.mean()) <= 4 * std::hypot(ca.standard_error(), ce.standard_error()));
+        CHECK(a.n_absorbed[i] == 0);
+    }
+    // Mesh grains (snow preset, lossless): a valid table, nothing absorbed, mostly scattered exits;
+    // default host frames.
+    const GranularAggregate<B> snow(tile, VoxelizedBoundary<B>({}, tile.side()),
+                                    {Grain::from_preset(grain_preset("snow"), 2)}, {1.0}, 5);
+    const ShellSamples sn = collect_shell_samples(GrainAggregateShellSource<B>(snow, 10 * R), radii, 3000, 13, 64, 8 * R);
+    const ShellTable ts = build_shell_table(sn).table;
+    CHECK_NOTHROW(ts.validate());
+    for (std::size_t i = 0; i < radii.size(); ++i) {
+        CHECK(ts.p_absorbed[i] == 0.0);
+        CHECK(ts.p_scattered[i] > 0.3);
+    }
+    CHECK_THROWS_WITH(GrainAggregateShellSource<B>(snow, 0.0), Catch::Contains("burn_in"));
+}
+
 TEST_CASE("Shell tables: save/load round trip, corrupted and truncated files", "[shells][io]") {
     const auto& f = fixture();
     const auto dir = std::filesystem::temp_directory_path() / "grainlight_test_shells";

@@ -185,6 +185,19 @@ private:
     SceneType scene_;
 };
 
+/// An `Env` of ShellTracer::trace that continues paths leaving the volume into the surrounding
+/// scene (the continuation hook): `S continue_outside(const Ray<double>& r, Rng& rng, bool
+/// direct_counted)` returns the radiance arriving at r.o along -r.d from everything the path meets
+/// from there on (surfaces it bounces off, with their own next-event estimation, and the volume
+/// again when it re-enters: explicit tracing there, shells again by the switch rule). With
+/// `direct_counted` the emission seen directly along the first segment of r is left out: a shadow
+/// ray of the tracer has estimated it already. Without the hook a path ends at the volume's
+/// boundary (`escape`: the light it sees, or nothing), losing light such as bowl -> table -> bowl.
+template <class Env, class S>
+concept ShellContinuationEnv = requires(const Env& env, const Ray<double>& r, Rng& rng) {
+    { env.continue_outside(r, rng, true) } -> std::convertible_to<S>;
+};
+
 /// Direction of a path that leaves the volume through a sampled shell exit point outside it.
 enum class ShellExitRule : std::uint8_t {
     radial,  ///< Moon07 (Fig. 5): along y - x, the ray from the shell centre to the exit point
@@ -248,6 +261,10 @@ struct ShellTraceStats {
 /// direction is counted through `escape`. Without `nee` every escape is followed by `escape`
 /// (exits leave along y - x, the paper's exit rule): the analog estimator the shadow rays
 /// replace. Both estimate the same expectation (tests/shells/test_shell_tracer.cpp).
+/// If `Env` also meets ShellContinuationEnv, a path that leaves the volume (exit outside or
+/// straight escape) is handed to `env.continue_outside` instead of ending at the boundary: the
+/// emission its shadow ray already estimated is left out of the first segment (direct_counted),
+/// all light after a bounce outside (and after re-entry) is kept.
 /// `exit_rule = ShellExitRule::table` makes exits outside leave from y along the sampled T_r
 /// direction instead of y - x (the first shadow ray then samples one exit point y and adds
 /// L p_r(w_l | y) cos if y is outside); `trace_to_boundary` (hand-back mode) needs no exit rule.
@@ -377,15 +394,28 @@ public:
                     continue;
                 case ShellStepKind::absorbed:
                     return L;
-                case ShellStepKind::escaped:
+                case ShellStepKind::escaped: {
                     if (stats) ++stats->straight_escapes;
-                    if (!opt_.nee || !dir_from_scatter) L += env.escape(Ray<double>(st.p, omega)) * beta;
+                    const bool counted = opt_.nee && dir_from_scatter;  // the second shadow ray estimated it
+                    if constexpr (ShellContinuationEnv<Env, S>) {
+                        L += env.continue_outside(Ray<double>(st.p, omega), rng, counted) * beta;
+                    } else {
+                        if (!counted) L += env.escape(Ray<double>(st.p, omega)) * beta;
+                    }
                     return L;
-                case ShellStepKind::exited:
+                }
+                case ShellStepKind::exited: {
                     if (stats) ++stats->exits;
-                    if (!opt_.nee)
-                        L += env.escape(Ray<double>(st.p, opt_.exit_rule == ShellExitRule::table ? st.w_table : st.w)) * beta;
+                    const Ray<double> out(st.p, opt_.exit_rule == ShellExitRule::table ? st.w_table : st.w);
+                    beta *= st.weight;  // expected survival of the shell's events (1 - P_a share)
+                    if constexpr (ShellContinuationEnv<Env, S>) {
+                        // the first shadow ray estimated the emission seen along `out` (with nee)
+                        if (beta > 0) L += env.continue_outside(out, rng, opt_.nee) * beta;
+                    } else {
+                        if (!opt_.nee) L += env.escape(out) * beta;
+                    }
                     return L;
+                }
                 case ShellStepKind::scattered: {
                     if (stats) ++stats->scattered;
                     beta *= st.weight;

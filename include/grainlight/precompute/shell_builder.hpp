@@ -19,6 +19,8 @@
 ///         point reached after a random burn-in path length (Moon07: "a random point and
 ///         orientation along each path is chosen ... to avoid correlation between the paths and
 ///         the geometry").
+///       * `GrainAggregateShellSource<Shape>`: the grains of a Meng15 procedural aggregate
+///         (traversal/aggregate.hpp; any exemplar mix), traced as EPT does (integrators/ept.hpp).
 ///   - `collect_shell_samples`: runs n paths of a source (OpenMP over fixed blocks; the result is
 ///     identical for any thread count).
 ///   - `knn_density_grid`: k-NN (balloon) density at cell centres (Sec. 4.1, the paper's form);
@@ -48,6 +50,7 @@
 #include "grainlight/core/frame.hpp"
 #include "grainlight/core/rng.hpp"
 #include "grainlight/core/warp.hpp"
+#include "grainlight/integrators/ept.hpp"
 #include "grainlight/integrators/walk.hpp"
 #include "grainlight/media/concepts.hpp"
 #include "grainlight/media/shell.hpp"
@@ -345,6 +348,149 @@ private:
     const PeriodicTile& tile_;
     double eta_, sigma_a_, burn_in_;
     int max_events_;
+};
+
+/// Path source: the grains of a procedural granular aggregate (Meng15 grain aggregates,
+/// traversal/aggregate.hpp `GranularAggregate`: any exemplar mix, mesh or analytic grains, any
+/// GrainMaterial), traced explicitly as EPT does it (integrators/ept.hpp: Algorithm 1 traversal to
+/// the next grain, `grain_sojourn` inside it, the same grain hit again on the way out of its
+/// bounding sphere). Use an aggregate over the whole space (EverywhereBoundary) for a table of the
+/// bulk medium. Start frames are points in the *host* (between grains): a path starts at a uniform
+/// host point outside every bounding sphere with a uniform direction, and the frame is where its
+/// host path length reaches a burn-in U(1, 2) x `burn_in` (a typical host point of a path under
+/// the path-length measure; the shell tracer must switch at host points too). Transport is grey
+/// and analog: a path whose throughput drops (absorbing grains) survives each grain with
+/// probability equal to its throughput (Russian roulette without reweighting), so only lossless
+/// or grey-absorbing materials give exact tables (coloured absorption needs one table per channel).
+template <BoundaryShape Shape>
+class GrainAggregateShellSource {
+public:
+    /// Source over `agg` (referenced: it must outlive the source). Throws
+    /// grainlight::invalid_argument naming the parameter for a non-finite or non-positive
+    /// burn_in, or max_events < 1.
+    /// `frames_in_grains`: measure the burn-in along the whole path (host and grain interiors), so
+    /// that frames are typical points of the path anywhere, as SpherePackingShellSource's are.
+    GrainAggregateShellSource(const GranularAggregate<Shape>& agg, double burn_in, int max_events = 1000000,
+                              bool frames_in_grains = false)
+        : agg_(agg), burn_in_(burn_in), max_events_(max_events), frames_in_grains_(frames_in_grains) {
+        constexpr const char* where = "GrainAggregateShellSource";
+        check_argument(std::isfinite(burn_in) && burn_in > 0, where, "burn_in", burn_in, "finite, > 0");
+        check_argument(max_events >= 1, where, "max_events", max_events, ">= 1");
+    }
+
+    /// One path into `rec` (a ShellRecorder or a type with its begin / segment / absorbed members).
+    template <class Recorder>
+    void trace(Rng& rng, Recorder& rec) const noexcept {
+        // A path that ends during its burn-in (absorbed, lost) is replaced by a new one: the
+        // burn-in is lossless, as in SpherePackingShellSource.
+        for (int attempt = 0; attempt < 1000; ++attempt)
+            if (trace_once(rng, rec)) return;
+        rec.begin(Vec3d(0.0), Vec3d(0.0, 0.0, 1.0));
+        rec.absorbed();
+    }
+
+private:
+    /// One attempt; false if the path ended before its start frame (nothing recorded).
+    template <class Recorder>
+    bool trace_once(Rng& rng, Recorder& rec) const noexcept {
+        using S = Spectrum<1, double>;
+        const double R = agg_.grain_radius();
+        const PeriodicTile& tile = agg_.tile();
+        Vec3d p(0.0);
+        for (int tries = 0; tries < 1000; ++tries) {
+            p = Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()) * tile.side();
+            bool in = false;
+            tile.for_each_overlapping(p, p, [&](const TileSphereRef& ref) {
+                if (glm::length(p - ref.center) < R) in = true;
+            });
+            if (!in) break;
+        }
+        Vec3d d = sample_uniform_sphere(rng.uniform2<double>());
+        double burn = burn_in_ * (1.0 + rng.uniform<double>());
+        bool started = false, alive = true;
+        // A straight piece a -> b (host or in-grain); `event`: a surface event at b.
+        const auto piece = [&](const Vec3d& a, const Vec3d& b, bool host, bool event) {
+            if (!alive) return;
+            const Vec3d ab = b - a;
+            const double len = glm::length(ab);
+            if (!(len > 0)) return;
+            const Vec3d w = ab / len;
+            if (!started) {
+                const bool counts = host || frames_in_grains_;
+                if (!counts || len < burn) {
+                    if (counts) burn -= len;
+                    return;
+                }
+                rec.begin(a + burn * w, w);
+                started = true;
+                alive = rec.segment(a + burn * w, w, len - burn, event);
+                return;
+            }
+            alive = rec.segment(a, w, len, event);
+        };
+        S beta(1.0);
+        int events = 0;
+        const double max_flight = 1e6 * R;
+        while (events < max_events_ && alive) {
+            const AggregateHit h = agg_.intersect(p, d, 0.0, max_flight);
+            if (!h) {  // nothing ahead within the search range
+                if (!started) {
+                    p += burn * d;
+                    rec.begin(p, d);
+                }
+                (void)rec.segment(p, d, std::numeric_limits<double>::infinity(), false);
+                return true;
+            }
+            const Vec3d c = agg_.sphere_center(h.grain.tile, h.grain.sphere);
+            Vec3d q = p + h.t * d, n = h.n;
+            piece(p, q, true, true);
+            for (;;) {
+                if (!alive) return true;
+                const GrainSojourn s = grain_sojourn(
+                    agg_, h.grain, q, d, n, beta, rng, TransportMode::importance, max_events_ - events,
+                    [](const Vec3d&, const Vec3d&, S&) {},
+                    [&](const Vec3d& a, const Vec3d& b) { piece(a, b, false, true); });
+                events += s.events;
+                if (!alive) return true;
+                if (!s.is_exited()) {
+                    if (!started) return false;
+                    rec.absorbed();
+                    return true;
+                }
+                // Leave the bounding sphere, unless the same grain is hit again on the way.
+                const auto r2 = intersect_sphere(s.p, s.d, c, R);
+                const double t_out = r2.hit ? std::max(0.0, r2.t_far) : 0.0;
+                const AggregateHit again = agg_.intersect_grain(h.grain, s.p, s.d, 0.0, t_out);
+                if (again) {
+                    q = s.p + again.t * s.d;
+                    piece(s.p, q, true, true);
+                    d = s.d;
+                    n = again.n;
+                    continue;
+                }
+                p = s.p;
+                d = s.d;
+                break;
+            }
+            // Analog roulette on the grain's survival weight (grey; 1 for lossless grains).
+            const double q_rr = std::min(1.0, double(beta[0]));
+            if (q_rr < 1.0 && started) {
+                if (!(q_rr > 0) || rng.uniform<double>() >= q_rr) {
+                    rec.absorbed();
+                    return true;
+                }
+            }
+            beta = S(1.0);
+        }
+        if (!started) return false;
+        if (alive) rec.absorbed();  // event budget
+        return true;
+    }
+
+    const GranularAggregate<Shape>& agg_;
+    double burn_in_;
+    int max_events_;
+    bool frames_in_grains_;
 };
 
 /// Paths per block of collect_shell_samples (the unit of work split over threads and processes).
