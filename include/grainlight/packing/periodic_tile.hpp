@@ -406,7 +406,8 @@ public:
     /// (absolute index, the origin tile included); while it returns false the cells of that tile
     /// are not searched, so a sphere is reported only if its chord meets a tile the filter
     /// accepted (the caller asserts it wants no sphere overlapping a rejected tile). The order and
-    /// the intervals of the spheres reported do not depend on the filter.
+    /// the intervals of the spheres reported do not depend on the filter. No allocation; throws
+    /// only what the callbacks throw.
     ///
     /// Cost: one Amanatides-Woo step per grid cell (the tile index and the cell id are updated
     /// incrementally, no division or floor per step); per listed sphere a division-free cull
@@ -415,7 +416,8 @@ public:
     /// margin), and intersect_sphere (the exact test of first_hit) only on the survivors.
     template <class TileFilter, class Visit>
     bool walk_spheres(const Vec3i64& origin_tile, const Vec3d& local_origin, const Vec3d& d, double t_min,
-                      double t_max, TileFilter&& tile_filter, Visit&& visit) const noexcept {
+                      double t_max, TileFilter&& tile_filter, Visit&& visit) const
+        noexcept(noexcept(tile_filter(std::declval<const Vec3i64&>())) && noexcept(visit(std::declval<const TileHit&>()))) {
         const double dlen = std::sqrt(glm::dot(d, d));
         if (centers_.empty() || !(dlen > 0) || !(t_min <= t_max)) return false;
         const double t_end = std::min(t_max, t_min + max_search_ / dlen);
