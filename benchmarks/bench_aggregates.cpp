@@ -23,26 +23,18 @@
 #include "grainlight/packing/md_packer.hpp"
 #include "grainlight/traversal/aggregate.hpp"
 
+#include "common/aggregate_rays.hpp"
+
 using namespace grainlight;
 
 namespace {
 
 using Agg = GranularAggregate<SphereBoundary>;
-constexpr double f_pack = 0.6;
-
-const PeriodicTile& unit_tile() {
-    static const PeriodicTile tile = [] {
-        const auto packed = md_pack(200, f_pack, 1);
-        const double s = 1.0 / packed.tile.radius();
-        std::vector<Vec3d> c = packed.tile.centers();
-        for (auto& x : c) x *= s;
-        return PeriodicTile(packed.tile.side() * s, 1.0, std::move(c));
-    }();
-    return tile;
-}
-
-/// Radius of the boundary sphere holding about n unit grains at the tile's packing rate.
-double boundary_radius(double n) { return std::cbrt(n / unit_tile().packing_fraction()); }
+using bench::boundary_radius;
+using bench::Rays;
+using bench::unit_tile;
+constexpr auto make_rays = bench::camera_rays;
+constexpr auto make_interior_rays = bench::interior_rays;
 
 const Agg& aggregate(int log10n) {
     static std::map<int, std::unique_ptr<Agg>> cache;
@@ -58,35 +50,7 @@ const Agg& aggregate(int log10n) {
     return *p;
 }
 
-struct Rays {
-    std::vector<Vec3d> o, d;
-};
-/// Rays from outside the aggregate toward random points of its inner half.
-Rays make_rays(double rb, std::size_t n) {
-    Rays r;
-    Rng rng = Rng::from_key(5);
-    for (std::size_t i = 0; i < n; ++i) {
-        const Vec3d o = 1.5 * rb * sample_uniform_sphere(rng.uniform2<double>());
-        const Vec3d t = 0.5 * rb * rng.uniform<double>() * sample_uniform_sphere(rng.uniform2<double>());
-        r.o.push_back(o);
-        r.d.push_back(glm::normalize(t - o));
-    }
-    return r;
-}
-
 /// Two-level BVH over explicit grain instances.
-/// Rays starting at random points inside the aggregate (between or inside bounding spheres) in
-/// random directions: the situation of a path inside the material (EPT scattering).
-Rays make_interior_rays(double rb, std::size_t n) {
-    Rays r;
-    Rng rng = Rng::from_key(6);
-    for (std::size_t i = 0; i < n; ++i) {
-        r.o.push_back(0.8 * rb * std::cbrt(rng.uniform<double>()) * sample_uniform_sphere(rng.uniform2<double>()));
-        r.d.push_back(sample_uniform_sphere(rng.uniform2<double>()));
-    }
-    return r;
-}
-
 class InstanceBvh {
 public:
     struct Inst {

@@ -33,6 +33,8 @@
 #include "grainlight/packing/md_packer.hpp"
 #include "grainlight/traversal/aggregate.hpp"
 
+#include "common/aggregate_rays.hpp"
+
 using namespace grainlight;
 
 namespace {
@@ -49,17 +51,11 @@ double resident_bytes() {
     return pages_resident * 4096.0;
 }
 
-const PeriodicTile& unit_tile() {
-    static const PeriodicTile tile = [] {
-        const auto packed = md_pack(200, 0.6, 1);
-        const double s = 1.0 / packed.tile.radius();
-        std::vector<Vec3d> c = packed.tile.centers();
-        for (auto& x : c) x *= s;
-        return PeriodicTile(packed.tile.side() * s, 1.0, std::move(c));
-    }();
-    return tile;
-}
-double boundary_radius(double n) { return std::cbrt(n / unit_tile().packing_fraction()); }
+using bench::boundary_radius;
+using bench::camera_rays;
+using bench::interior_rays;
+using bench::Rays;
+using bench::unit_tile;
 
 const TriangleMesh<float>& exemplar_mesh() {
     static const TriangleMesh<float> m = make_grain_mesh<float>(GrainShape::snow, 1.0f, kGrainSeed, kGrainLevel);
@@ -160,32 +156,6 @@ const EmbreeGrains& embree(int lg) {
     auto& p = cache[lg];
     if (!p) p = std::make_unique<EmbreeGrains>(aggregate(lg), boundary_radius(std::pow(10.0, lg)));
     return *p;
-}
-
-struct Rays {
-    std::vector<Vec3d> o, d;
-};
-/// Camera-like rays: from outside toward random points of the inner half (as bench_aggregates).
-Rays camera_rays(double rb, std::size_t n) {
-    Rays r;
-    Rng rng = Rng::from_key(5);
-    for (std::size_t i = 0; i < n; ++i) {
-        const Vec3d o = 1.5 * rb * sample_uniform_sphere(rng.uniform2<double>());
-        const Vec3d t = 0.5 * rb * rng.uniform<double>() * sample_uniform_sphere(rng.uniform2<double>());
-        r.o.push_back(o);
-        r.d.push_back(glm::normalize(t - o));
-    }
-    return r;
-}
-/// Interior rays: random points inside, random directions (a path inside the material).
-Rays interior_rays(double rb, std::size_t n) {
-    Rays r;
-    Rng rng = Rng::from_key(6);
-    for (std::size_t i = 0; i < n; ++i) {
-        r.o.push_back(0.8 * rb * std::cbrt(rng.uniform<double>()) * sample_uniform_sphere(rng.uniform2<double>()));
-        r.d.push_back(sample_uniform_sphere(rng.uniform2<double>()));
-    }
-    return r;
 }
 
 template <bool Interior>

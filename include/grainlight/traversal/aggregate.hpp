@@ -133,7 +133,7 @@ public:
     /// the number of grains (the boundary part grows with the shape's size in tiles).
     [[nodiscard]] std::size_t memory_bytes() const noexcept {
         const auto m = std::size_t(tile().grid_resolution());
-        std::size_t b = tile().size() * sizeof(Vec3d) * 2 + m * m * m * sizeof(std::uint32_t) + tile().size() * 27 * 32;
+        std::size_t b = tile().size() * sizeof(Vec3d) * 2 + m * m * m * sizeof(std::uint32_t) + tile().size() * 27 * (32 + 12);  // cell entries + their float SoA copy
         b += boundary().memory_bytes();
         if constexpr (requires { boundary().refinement_bytes(); }) b += boundary().refinement_bytes();
         if constexpr (requires { boundary().shape().memory_bytes(); }) b += boundary().shape().memory_bytes();

@@ -13,15 +13,16 @@
 /// header does not depend on any mesh type.
 ///
 /// Traversal (Algorithm 1 with our choices):
-/// 1. an Amanatides-Woo DDA (dda.hpp) walks the tile-sized voxels along the ray (64-bit indices);
-///    a voxel is skipped when it and its 26 neighbours are all outside (a sphere whose centre is
-///    in a neighbour can reach up to R < L/2 into the voxel);
-/// 2. inside a voxel's segment, PeriodicTile::first_hit returns the bounding spheres in order;
-///    a sphere is kept if its centre's voxel is inside, or partial and point_inside(centre)
-///    (Algorithm 1 line 9);
+/// 1. one walk along the ray over the tile's query grid (PeriodicTile::walk_spheres: an
+///    Amanatides-Woo DDA with 64-bit indices whose cells are aligned with the tile-sized voxels);
+///    the cells of a voxel are not searched when it and its 26 neighbours are all outside (a
+///    sphere whose centre is in a neighbour can reach up to R < L/2 into the voxel);
+/// 2. the bounding spheres along the ray come in order of entry (the same spheres and intervals
+///    as PeriodicTile::first_hit restarted at each exit); a sphere is kept if its centre's voxel
+///    is inside, or partial and point_inside(centre) (Algorithm 1 line 9);
 /// 3. the ray is transformed into the grain frame (rotation, then scaling by 1/R so the bounding
 ///    sphere is the unit sphere) and passed to the intersector (line 10); without a hit the
-///    search continues from the bounding-sphere exit (line 14).
+///    walk continues past the bounding-sphere exit (line 14).
 /// Bounding spheres are disjoint, so the first grain hit found is the closest one.
 #pragma once
 
@@ -119,7 +120,7 @@ struct TiledHit {
 
 /// Counters for benchmarks and tests.
 struct TiledTraversalStats {
-    std::uint64_t voxels_visited = 0;   ///< voxels stepped through by the DDA
+    std::uint64_t voxels_visited = 0;   ///< tile-sized voxels entered by the walk
     std::uint64_t voxels_skipped = 0;   ///< of those, skipped as outside (with their neighbours)
     std::uint64_t spheres_tested = 0;   ///< bounding spheres hit by the ray
     std::uint64_t grains_tested = 0;    ///< intersector calls
@@ -171,6 +172,18 @@ public:
     /// (seed, tile, sphere). `center` is given relative to the corner of tile `frame`.
     [[nodiscard]] TiledGrain instance(std::uint32_t sphere, const Vec3i64& tile,
                                          const Vec3i64& frame = Vec3i64(0, 0, 0)) const noexcept {
+        return instance(sphere, tile, frame, tile_hash(tile));
+    }
+
+    /// The first part of a grain's key, shared by the spheres of a tile:
+    /// hash_words(seed, tile.x, tile.y, tile.z) (the key is hash_words(..., sphere)).
+    [[nodiscard]] std::uint64_t tile_hash(const Vec3i64& tile) const noexcept {
+        return hash_words(seed_, std::uint64_t(tile.x), std::uint64_t(tile.y), std::uint64_t(tile.z));
+    }
+
+    /// instance() with the tile's part of the key precomputed (tile_hash(tile)); the same grain.
+    [[nodiscard]] TiledGrain instance(std::uint32_t sphere, const Vec3i64& tile, const Vec3i64& frame,
+                                      std::uint64_t tile_key) const noexcept {
         TiledGrain g;
         g.sphere = sphere;
         g.tile = tile;
@@ -178,7 +191,7 @@ public:
         const double L = tile_.side();
         g.center = Vec3d(double(tile.x - frame.x), double(tile.y - frame.y), double(tile.z - frame.z)) * L +
                    tile_.center(sphere);
-        g.key = hash_words(seed_, std::uint64_t(tile.x), std::uint64_t(tile.y), std::uint64_t(tile.z), sphere);
+        g.key = mix64(tile_key ^ std::uint64_t(sphere));  // = hash_words(seed, tile.x, tile.y, tile.z, sphere)
         Rng rng = Rng::from_key(g.key);
         const double u1 = rng.uniform<double>(), u2 = rng.uniform<double>(), u3 = rng.uniform<double>();
         const double s1 = std::sqrt(1 - u1), s2 = std::sqrt(u1);
@@ -216,41 +229,44 @@ public:
         }
         // A ray along a channel of the periodic packing may never hit a sphere: bound the search.
         t_max = std::min(t_max, t_min + tile_.max_search_distance() / dlen);
-        double cursor = t_min;  // everything before this parameter has been processed
-        for (GridDda<double> dda(origin_tile, local_origin, d, Vec3d(L), t_min, t_max); !dda.done(); dda.step()) {
-            if (stats) ++stats->voxels_visited;
-            const Vec3i64 v = dda.cell();
-            if (!needs_processing(v)) {
-                if (stats) ++stats->voxels_skipped;
-                continue;
-            }
-            const double seg_end = dda.t_exit();
-            double s = std::max(cursor, dda.t_enter());
-            while (s <= seg_end) {
-                const TileHit h = tile_.first_hit(origin_tile, local_origin, d, s, seg_end);
-                if (!h) break;
+        Vec3i64 key_tile = origin_tile;
+        std::uint64_t tile_key = 0;
+        bool have_key = false;
+        // One walk over the tile's query grid along the whole ray (PeriodicTile::walk_spheres):
+        // the bounding spheres in order of entry, skipping the tiles no grain can reach.
+        tile_.walk_spheres(
+            origin_tile, local_origin, d, t_min, t_max,
+            [&](const Vec3i64& v) {
+                if (stats) ++stats->voxels_visited;
+                const bool keep = needs_processing(v);
+                if (stats && !keep) ++stats->voxels_skipped;
+                return keep;
+            },
+            [&](const TileHit& h) {
                 if (stats) ++stats->spheres_tested;
-                cursor = h.t_exit;
-                if (contains(h.sphere, h.tile)) {
-                    TiledGrain g = instance(h.sphere, h.tile, origin_tile);
-                    g.t_enter = h.t_enter;
-                    g.t_exit = h.t_exit;
-                    GrainRay r;
-                    r.o = g.point_to_local(local_origin);
-                    r.d = g.direction_to_local(d) / g.radius;
-                    const double t0 = std::max(t_min, h.t_enter), t1 = std::min(t_max, h.t_exit);
-                    double t_hit = std::numeric_limits<double>::infinity();
-                    if (stats) ++stats->grains_tested;
-                    if (t0 <= t1 && grain(g, r, t0, t1, t_hit)) {
-                        result.hit = true;
-                        result.t = t_hit;
-                        result.grain = g;
-                        return result;
-                    }
+                if (!contains(h.sphere, h.tile)) return false;
+                if (!have_key || !(h.tile == key_tile)) {  // consecutive grains mostly share a tile
+                    have_key = true;
+                    key_tile = h.tile;
+                    tile_key = tile_hash(h.tile);
                 }
-                s = cursor;
-            }
-        }
+                TiledGrain g = instance(h.sphere, h.tile, origin_tile, tile_key);
+                g.t_enter = h.t_enter;
+                g.t_exit = h.t_exit;
+                GrainRay r;
+                r.o = g.point_to_local(local_origin);
+                r.d = g.direction_to_local(d) / g.radius;
+                const double t0 = std::max(t_min, h.t_enter), t1 = std::min(t_max, h.t_exit);
+                double t_hit = std::numeric_limits<double>::infinity();
+                if (stats) ++stats->grains_tested;
+                if (t0 <= t1 && grain(g, r, t0, t1, t_hit)) {
+                    result.hit = true;
+                    result.t = t_hit;
+                    result.grain = g;
+                    return true;
+                }
+                return false;
+            });
         return result;
     }
 
