@@ -71,6 +71,8 @@
 #include "grainlight/core/rng.hpp"
 #include "grainlight/core/warp.hpp"
 #include "grainlight/geometry/aabb.hpp"
+#include "grainlight/geometry/closed_mesh.hpp"
+#include "grainlight/geometry/surface_sampling.hpp"
 #include "grainlight/integrators/ms_table.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/optics/fresnel.hpp"
@@ -150,6 +152,22 @@ template <std::floating_point F>
         const Vec3<F> nn(F(r * std::cos(ph)), F(r * std::sin(ph)), F(z));
         out[std::size_t(i)] = {s.center + s.radius * nn, nn, s.area() / F(n)};
     }
+    return out;
+}
+
+/// About `n` blue-noise (Poisson-disk, dart throwing) surface samples on a closed mesh boundary
+/// (Sec. 3.4.1), each with the area A / count and its triangle's outward normal; deterministic for
+/// `seed`. `radius_out` receives the Poisson-disk radius. Throws invalid_argument if n < 1 or if
+/// no sample could be placed.
+template <std::floating_point F>
+[[nodiscard]] inline std::vector<SurfaceSample<F>> mesh_surface_samples(const ClosedMeshShape<F>& m, int n,
+                                                                       std::uint64_t seed, double* radius_out = nullptr) {
+    check_argument(n >= 1, "mesh_surface_samples", "n", n, ">= 1");
+    const auto pts = poisson_disk_mesh_points(m.mesh(), n, seed, radius_out);
+    check_argument(!pts.empty(), "mesh_surface_samples", "samples placed", pts.size(), ">= 1");
+    std::vector<SurfaceSample<F>> out(pts.size());
+    const F a = F(m.area() / double(pts.size()));
+    for (std::size_t i = 0; i < pts.size(); ++i) out[i] = {pts[i].p, pts[i].n, a};
     return out;
 }
 
@@ -433,7 +451,6 @@ public:
         const Phase& ph = medium_.phase();
         auto pval = [&](const Vec3<F>& a, const Vec3<F>& b) { return F(ph.eval(a, b).value.average()); };
         const S sig_s = medium_.sigma_s();
-        const S& sig_t = medium_.sigma_t();
         auto contrib = [&](const Vec3<F>& xv, const Vec3<F>& dv, const S& wv, F coherence, F c_view) {
             const Vec3<F> rv = P - xv;
             const F r = glm::length(rv);
