@@ -149,6 +149,9 @@ inline gl::MsTable<3> cached_table(const std::filesystem::path& dir, const Bumpy
     return table;
 }
 
+/// Mean of an RGB image over pixels and channels.
+inline double image_mean(const gl::Image& a) { return (a.mean(0) + a.mean(1) + a.mean(2)) / 3.0; }
+
 /// A point-based render: one image per component, CPU times, sample counts.
 struct PbRun {
     std::vector<gl::Image> img;
@@ -205,6 +208,38 @@ inline PbRun render_pb(const gl_examples::Example& ex, const BumpyScene& sc, con
         [](int&, int) {});
     r.cpu_render = cpu_seconds() - c0;
     return r;
+}
+
+/// Average of independent point-based runs (different light-sample seeds): images averaged, CPU
+/// times and memory summed; `build_se[k]` receives the standard error of component k's image mean
+/// over the runs (the point-based estimate's own noise; 0 for one run).
+inline PbRun average_runs(const std::vector<PbRun>& runs, std::array<double, kComp>& build_se) {
+    PbRun a = runs.front();
+    build_se.fill(0.0);
+    const double n = double(runs.size());
+    for (int k = 0; k < kComp; ++k) {
+        std::vector<double> m;
+        for (const auto& r : runs) m.push_back(image_mean(r.img[std::size_t(k)]));
+        double mu = 0, v = 0;
+        for (double x : m) mu += x / n;
+        for (double x : m) v += runs.size() > 1 ? (x - mu) * (x - mu) / (n - 1) : 0.0;
+        build_se[std::size_t(k)] = std::sqrt(v / n);
+        for (int y = 0; y < a.img[0].height; ++y)
+            for (int x = 0; x < a.img[0].width; ++x)
+                for (int ch = 0; ch < 3; ++ch) {
+                    double s = 0;
+                    for (const auto& r : runs) s += r.img[std::size_t(k)].at(x, y, ch);
+                    a.img[std::size_t(k)].at(x, y, ch) = float(s / n);
+                }
+    }
+    a.cpu_samples = a.cpu_render = 0;
+    a.bytes = 0;
+    for (const auto& r : runs) {
+        a.cpu_samples += r.cpu_samples;
+        a.cpu_render += r.cpu_render;
+        a.bytes = std::max(a.bytes, r.bytes);
+    }
+    return a;
 }
 
 /// VPT callbacks: scattered light by number of scattering events; paths with a boundary
@@ -303,8 +338,6 @@ struct Comparison {
     double ref_var_mean[kComp]{};  ///< reference variance of the mean, averaged over pixels
     double ref_var_per_sample = 0, var_half_ratio = 0, speedup = 0, bounced_share = 0;
 };
-
-inline double image_mean(const gl::Image& a) { return (a.mean(0) + a.mean(1) + a.mean(2)) / 3.0; }
 
 /// Compare a point-based run with the reference; the equal-error speed-up is on the total.
 inline Comparison compare(const PbRun& pb, const VptRun& v) {

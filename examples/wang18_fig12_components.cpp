@@ -12,6 +12,8 @@
 // Outputs: wang18_fig12_{pb,vpt}_<component>.{exr,png}, wang18_fig12_components.csv; the JSON
 // summary (last stdout line) has rel_diff_<component> with rel_se_<component>, e2_<component>,
 // speedup_equal_error, the times and memory.
+#include <array>
+#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -26,6 +28,8 @@ int main(int argc, char** argv) {
         [&](gl_examples::Example& ex) -> int {
             const int vpt_spp = ex.opt<int>("vpt-spp", 256, 2048, "VPT samples per pixel and channel (multiple of 8)");
             const int n_surface = ex.opt<int>("surface-samples", 12000, 40000, "Poisson-disk light surface samples on the mesh");
+            const int builds = ex.opt<int>("builds", 3, 2, "independent light-sample builds averaged (their spread is the point-based noise)");
+            const int rays = ex.opt<int>("rays", 4, 1, "camera rays per pixel of the point-based render");
             const int W = ex.opt<int>("width", 32, 96, "image width = height in pixels");
             const double eps1 = ex.opt<double>("eps1", 1.0, 0.2, "Alg. 1 solid-angle threshold eps1 (sr); eps2 = eps1 / 5");
             const double R_opt = ex.opt<double>("radius-mfp", 20.0, "sphere radius in green mean free paths");
@@ -35,6 +39,8 @@ int main(int argc, char** argv) {
             if (vpt_spp < 16 || vpt_spp % wang18::kBatches != 0)
                 throw gl_examples::cli_error("--vpt-spp must be >= 16 and a multiple of 8");
             if (n_surface < 16 || n_surface > 10000000) throw gl_examples::cli_error("--surface-samples must be in [16, 1e7]");
+            if (builds < 1 || builds > 64) throw gl_examples::cli_error("--builds must be in [1, 64]");
+            if (rays < 1 || rays > 1024) throw gl_examples::cli_error("--rays must be in [1, 1024]");
             if (W < 4 || W > 2048) throw gl_examples::cli_error("--width must be in [4, 2048]");
             if (!(eps1 > 0 && eps1 <= 10)) throw gl_examples::cli_error("--eps1 must be in (0, 10]");
             if (!(R_opt > 0.5 && R_opt <= 200)) throw gl_examples::cli_error("--radius-mfp must be in (0.5, 200]");
@@ -51,9 +57,17 @@ int main(int argc, char** argv) {
             gl::PointBasedOptions<float> po = wang18::default_options(sc, full);
             po.cut.eps1 = float(eps1);
             po.cut.eps2 = 0.2f * float(eps1);
-            const wang18::PbRun pb = wang18::render_pb(ex, sc, &table, po, n_surface, seed, "fig12 point-based");
+            std::vector<wang18::PbRun> runs;
+            for (int b = 0; b < builds; ++b)
+                runs.push_back(wang18::render_pb(ex, sc, &table, po, n_surface, seed + 1000 * std::uint64_t(b),
+                                                 "fig12 point-based build " + std::to_string(b + 1), rays));
+            std::array<double, wang18::kComp> pb_se{};
+            const wang18::PbRun pb = wang18::average_runs(runs, pb_se);
             const wang18::VptRun vpt = wang18::render_vpt(ex, sc, vpt_spp, seed, "fig12 VPT reference");
-            const wang18::Comparison c = wang18::compare(pb, vpt);
+            wang18::Comparison c = wang18::compare(pb, vpt);
+            // The relative difference's standard error: the reference's batches and the builds.
+            for (int k = 0; k < wang18::kComp; ++k)
+                c.rel_se[k] = c.ref[k] > 0 ? std::hypot(c.ref_se[k], pb_se[std::size_t(k)]) / c.ref[k] : 0.0;
 
             const double exposure = 4.0;
             for (int k = 0; k < wang18::kComp; ++k) {
@@ -64,6 +78,9 @@ int main(int argc, char** argv) {
             std::printf("Wang18 Fig. 12: bumpy sphere mesh (%zu triangles, bumps %.2f), radius %.0f green mean free paths, "
                         "BmpS. material, g 0.7, eta 1.33; %d x %d pixels\n",
                         sc.shape.triangle_count(), bumps, R_opt, W, W);
+            std::printf("  %d independent light-sample builds averaged, %d camera rays per pixel; rel.diff s.e. = reference "
+                        "batches and the builds' spread\n",
+                        builds, rays);
             std::printf("  %d Poisson-disk surface samples (radius %.4f), %zu volume samples, %d bounce samples; MS table "
                         "%ux%ux%ux%u (%.2f s%s)\n",
                         pb.surface_samples, pb.poisson_radius, pb.volume_samples, po.bounce_samples, table.grid().n_rho,
@@ -89,12 +106,13 @@ int main(int argc, char** argv) {
                         c.e2[4], c.ref_var_per_sample, c.var_half_ratio, c.speedup);
 
             gl_examples::Json j = ex.summary();
-            j.integer("width", W).integer("vpt_spp", vpt_spp).integer("surface_samples", pb.surface_samples);
+            j.integer("width", W).integer("rays", rays).integer("builds", builds).integer("vpt_spp", vpt_spp).integer("surface_samples", pb.surface_samples);
             j.integer("triangles", (long long)sc.shape.triangle_count()).integer("volume_samples", (long long)pb.volume_samples);
             for (int k = 0; k < wang18::kComp; ++k) {
                 const std::string nm = wang18::kCompName[k];
                 j.num("pb_" + nm, c.pb[k]).num("vpt_" + nm, c.ref[k]);
                 j.num("rel_diff_" + nm, c.rel[k]).num("rel_se_" + nm, c.rel_se[k]).num("e2_" + nm, c.e2[k]);
+                j.num("pb_build_rel_se_" + nm, c.ref[k] > 0 ? pb_se[std::size_t(k)] / c.ref[k] : 0.0);
             }
             j.num("bounced_share", c.bounced_share)
                 .num("seconds_table", cpu_table)

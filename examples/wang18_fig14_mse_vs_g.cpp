@@ -25,12 +25,14 @@ int main(int argc, char** argv) {
             const std::vector<double> gs = ex.opt<std::vector<double>>("g", {0.0, 0.3, 0.5, 0.7, 0.9}, "HG g values");
             const int vpt_spp = ex.opt<int>("vpt-spp", 128, 1024, "VPT samples per pixel and channel (multiple of 8)");
             const int n_surface = ex.opt<int>("surface-samples", 10000, 40000, "Poisson-disk light surface samples");
+            const int rays = ex.opt<int>("rays", 4, 4, "camera rays per pixel of the point-based render");
             const int W = ex.opt<int>("width", 20, 64, "image width = height in pixels");
             const double R_opt = ex.opt<double>("radius-mfp", 20.0, "sphere radius in green mean free paths");
             ex.ready();
             if (vpt_spp < 16 || vpt_spp % wang18::kBatches != 0)
                 throw gl_examples::cli_error("--vpt-spp must be >= 16 and a multiple of 8");
             if (n_surface < 16 || n_surface > 10000000) throw gl_examples::cli_error("--surface-samples must be in [16, 1e7]");
+            if (rays < 1 || rays > 1024) throw gl_examples::cli_error("--rays must be in [1, 1024]");
             if (W < 4 || W > 2048) throw gl_examples::cli_error("--width must be in [4, 2048]");
             if (!(R_opt > 0.5 && R_opt <= 200)) throw gl_examples::cli_error("--radius-mfp must be in (0.5, 200]");
             if (gs.empty()) throw gl_examples::cli_error("--g needs at least one value");
@@ -58,7 +60,7 @@ int main(int argc, char** argv) {
                 po.bounce_samples = full ? 2048 : 256;
                 char lab[64];
                 std::snprintf(lab, sizeof lab, "fig14 g=%.2f", g);
-                const wang18::PbRun pb = wang18::render_pb(ex, sc, &table, po, n_surface, seed, std::string(lab) + " point-based");
+                const wang18::PbRun pb = wang18::render_pb(ex, sc, &table, po, n_surface, seed, std::string(lab) + " point-based", rays);
                 const wang18::VptRun vpt = wang18::render_vpt(ex, sc, vpt_spp, seed, std::string(lab) + " VPT");
                 const wang18::Comparison c = wang18::compare(pb, vpt);
                 std::vector<double> row{g};
