@@ -22,10 +22,10 @@ int main(int argc, char** argv) {
     return gl_examples::run(
         argc, argv, "wang18_fig24_epsilon", "Wang18 Fig. 24: point-based time and error vs the solid-angle threshold eps1",
         "out/wang18_fig24_epsilon", [&](gl_examples::Example& ex) -> int {
-            const std::vector<double> eps = ex.opt<std::vector<double>>("eps", {2.0, 1.0, 0.5, 0.2, 0.1},
+            const std::vector<double> eps = ex.opt<std::vector<double>>("eps", {2.0, 1.0, 0.5, 0.2},
                                                                         {2.0, 1.0, 0.5, 0.2, 0.1, 0.05}, "eps1 values (sr)");
             const int vpt_spp = ex.opt<int>("vpt-spp", 256, 2048, "VPT samples per pixel and channel (multiple of 8)");
-            const int n_surface = ex.opt<int>("surface-samples", 8000, 40000, "Poisson-disk light surface samples");
+            const int n_surface = ex.opt<int>("surface-samples", 6000, 40000, "Poisson-disk light surface samples");
             const int rays = ex.opt<int>("rays", 4, 4, "camera rays per pixel of the point-based render");
             const int W = ex.opt<int>("width", 16, 64, "image width = height in pixels");
             const double R_opt = ex.opt<double>("radius-mfp", 20.0, "sphere radius in green mean free paths");

@@ -865,25 +865,17 @@ private:
         }
     }
 
-    /// Exact segment/OBB overlap [t0, t1] within [0, tmax]; false if none.
+    /// Exact segment/OBB overlap [t0, t1] within [0, tmax]; false if none (or if the segment
+    /// only touches the box: the overlap then carries no light). The segment is moved into the
+    /// box's frame (e1, e2, d) and clipped by the library's slab test (geometry/aabb.hpp).
     static bool clip_box(const Box& b, const Vec3<F>& o, const Vec3<F>& w, F tmax, F& t0, F& t1) noexcept {
         t0 = F(0);
         t1 = tmax;
         const Vec3<F> rel = o - b.c;
-        const std::array<std::pair<Vec3<F>, F>, 3> ax{{{b.e1, b.h1}, {b.e2, b.h2}, {b.d, b.hd}}};
-        for (const auto& [a, h] : ax) {
-            const F p = glm::dot(rel, a), v = glm::dot(w, a);
-            if (std::abs(v) < F(1e-12)) {
-                if (std::abs(p) > h) return false;
-                continue;
-            }
-            F ta = (-h - p) / v, tb = (h - p) / v;
-            if (ta > tb) std::swap(ta, tb);
-            t0 = std::max(t0, ta);
-            t1 = std::min(t1, tb);
-            if (t0 >= t1) return false;
-        }
-        return true;
+        const Vec3<F> ol(glm::dot(rel, b.e1), glm::dot(rel, b.e2), glm::dot(rel, b.d));
+        const Vec3<F> wl(glm::dot(w, b.e1), glm::dot(w, b.e2), glm::dot(w, b.d));
+        const Vec3<F> h(b.h1, b.h2, b.hd);
+        return clip_ray_to_box(ol, wl, -h, h, t0, t1) && t0 < t1;
     }
 
     void gather_segment(const Vec3<F>& o, const Vec3<F>& w, F dmax, const S& weight, Rng& rng,
