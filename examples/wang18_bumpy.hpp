@@ -163,10 +163,12 @@ struct PbRun {
 };
 
 /// Build the light samples (Poisson-disk surface samples on the mesh, `n_surface` of them, and
-/// `po.bounce_samples` bounce samples) and render every pixel with `rays` camera rays.
+/// `po.bounce_samples` bounce samples) and render every pixel with `rays` camera rays; with
+/// `compressed`, the camera rays read the table from its quadtree (the bounce samples are built
+/// from the dense one).
 inline PbRun render_pb(const gl_examples::Example& ex, const BumpyScene& sc, const gl::MsTable<3>* table,
                        const gl::PointBasedOptions<float>& po, int n_surface, std::uint64_t seed,
-                       const std::string& label, int rays = 1) {
+                       const std::string& label, int rays = 1, const gl::MsTableQuadtree<3>* compressed = nullptr) {
     PbRun r;
     r.img.assign(kComp, gl::Image(sc.W, sc.H));
     double c0 = cpu_seconds();
@@ -175,8 +177,9 @@ inline PbRun render_pb(const gl_examples::Example& ex, const BumpyScene& sc, con
     r.surface_samples = int(surf.size());
     const auto bounce = po.bounce_samples > 0 ? gl::mesh_surface_samples(sc.shape, po.bounce_samples, seed + 17)
                                               : std::vector<gl::SurfaceSample<float>>{};
-    const MeshRenderer pb(sc.medium(), sc.eta, sc.shape, surf, gl::Light<float, gl::RGB>::quad_light(sc.quad, gl::RGB(sc.Le)),
-                          po, lrng, table, bounce);
+    MeshRenderer pb(sc.medium(), sc.eta, sc.shape, surf, gl::Light<float, gl::RGB>::quad_light(sc.quad, gl::RGB(sc.Le)), po,
+                    lrng, table, bounce);
+    if (compressed) pb.use_compressed_table(compressed);
     r.cpu_samples = cpu_seconds() - c0;
     r.volume_samples = pb.volume_sample_count();
     r.bytes = pb.bytes();

@@ -33,6 +33,8 @@ int main(int argc, char** argv) {
             const int W = ex.opt<int>("width", 32, 96, "image width = height in pixels");
             const double eps1 = ex.opt<double>("eps1", 1.0, 0.2, "Alg. 1 solid-angle threshold eps1 (sr); eps2 = eps1 / 5");
             const double R_opt = ex.opt<double>("radius-mfp", 20.0, "sphere radius in green mean free paths");
+            const double tol = ex.opt<double>("table-tolerance", 0.0,
+                                              "quadtree compression tolerance of the MS table (relative to its peak; 0 lossless)");
             const int level = ex.opt<int>("mesh-level", 4, "icosphere subdivision level of the bumpy sphere (20 4^level triangles)");
             const double bumps = ex.opt<double>("bumps", 0.06, "relative height of the bumps");
             ex.ready();
@@ -44,6 +46,7 @@ int main(int argc, char** argv) {
             if (W < 4 || W > 2048) throw gl_examples::cli_error("--width must be in [4, 2048]");
             if (!(eps1 > 0 && eps1 <= 10)) throw gl_examples::cli_error("--eps1 must be in (0, 10]");
             if (!(R_opt > 0.5 && R_opt <= 200)) throw gl_examples::cli_error("--radius-mfp must be in (0.5, 200]");
+            if (!(tol >= 0 && tol < 0.1)) throw gl_examples::cli_error("--table-tolerance must be in [0, 0.1)");
             if (level < 1 || level > 7) throw gl_examples::cli_error("--mesh-level must be in [1, 7]");
             if (!(bumps >= 0 && bumps < 0.3)) throw gl_examples::cli_error("--bumps must be in [0, 0.3)");
             const bool full = ex.full();
@@ -54,13 +57,16 @@ int main(int argc, char** argv) {
             double cpu_table = 0;
             bool cached = false;
             const gl::MsTable<3> table = wang18::cached_table(out, sc, full, seed, cpu_table, cached);
+            const gl::MsTableQuadtree<3> qtree(table, tol);
+            // Table 2's table: 1024 x 512 (rho, z) cells x 36 x 18 directions x 3 channels of floats.
+            const double paper_dense_bytes = 1024.0 * 512.0 * 36.0 * 18.0 * 3.0 * 4.0;
             gl::PointBasedOptions<float> po = wang18::default_options(sc, full);
             po.cut.eps1 = float(eps1);
             po.cut.eps2 = 0.2f * float(eps1);
             std::vector<wang18::PbRun> runs;
             for (int b = 0; b < builds; ++b)
                 runs.push_back(wang18::render_pb(ex, sc, &table, po, n_surface, seed + 1000 * std::uint64_t(b),
-                                                 "fig12 point-based build " + std::to_string(b + 1), rays));
+                                                 "fig12 point-based build " + std::to_string(b + 1), rays, &qtree));
             std::array<double, wang18::kComp> pb_se{};
             const wang18::PbRun pb = wang18::average_runs(runs, pb_se);
             const wang18::VptRun vpt = wang18::render_vpt(ex, sc, vpt_spp, seed, "fig12 VPT reference");
@@ -85,6 +91,11 @@ int main(int argc, char** argv) {
                         "%ux%ux%ux%u (%.2f s%s)\n",
                         pb.surface_samples, pb.poisson_radius, pb.volume_samples, po.bounce_samples, table.grid().n_rho,
                         table.grid().n_z, table.grid().n_theta, table.grid().n_phi, cpu_table, cached ? ", cached" : "");
+            std::printf("  MS table read from its quadtree (tolerance %g): %.2f MB dense -> %.2f MB compressed (%zu of %zu cells "
+                        "stored)   [paper Table 2: %.1f GB dense at 1024 x 512 x 36 x 18 (our count: %.2f GB of floats) -> "
+                        "36-72 MB per material; that grid needs > 4 GB here and is not built]\n",
+                        tol, double(qtree.dense_bytes()) / 1e6, double(qtree.bytes()) / 1e6, qtree.stored_cells(),
+                        table.grid().cells(), 8.4, paper_dense_bytes / 1e9);
             std::printf("  %-9s %12s %12s %10s %9s %11s\n", "component", "point-based", "VPT", "VPT s.e.", "rel.diff", "e^2");
             gl_examples::Csv csv({"component", "pb_mean", "vpt_mean", "vpt_se", "rel_diff", "rel_se", "mse", "e2"});
             for (int k = 0; k < wang18::kComp; ++k) {
@@ -97,9 +108,9 @@ int main(int argc, char** argv) {
             (void)ex.csv("wang18_fig12_components.csv", csv);
             std::printf("  bounced light (boundary reflection between events): %.1f%% of the reference's scattered light\n",
                         100 * c.bounced_share);
-            std::printf("  CPU: point-based %.2f s (samples %.2f + render %.2f), %.1f MB samples + %.1f MB table; VPT %.2f s "
+            std::printf("  CPU: point-based %.2f s (samples %.2f + render %.2f), %.1f MB samples + %.1f MB compressed table; VPT %.2f s "
                         "(%d spp x 3 channels)\n",
-                        pb.cpu_total(), pb.cpu_samples, pb.cpu_render, double(pb.bytes) / 1e6, double(table.bytes()) / 1e6,
+                        pb.cpu_total(), pb.cpu_samples, pb.cpu_render, double(pb.bytes) / 1e6, double(qtree.bytes()) / 1e6,
                         vpt.cpu, vpt_spp);
             std::printf("  equal error (total): e^2 = %.3e, VPT variance per sample %.3e (batch halves agree to %.2f) -> "
                         "speed-up %.2fx   [paper Fig. 12: 1 min vs 6 h for UPBP, 360x]\n",
@@ -121,6 +132,9 @@ int main(int argc, char** argv) {
                 .num("seconds_vpt", vpt.cpu)
                 .num("memory_mb_samples", double(pb.bytes) / 1e6)
                 .num("memory_mb_table", double(table.bytes()) / 1e6)
+                .num("memory_mb_table_compressed", double(qtree.bytes()) / 1e6)
+                .num("table_tolerance", tol)
+                .num("paper_table_dense_gb", 8.4)
                 .num("vpt_variance_per_sample", c.ref_var_per_sample)
                 .num("vpt_variance_half_ratio", c.var_half_ratio)
                 .num("speedup_equal_error", c.speedup)
