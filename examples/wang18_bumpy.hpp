@@ -77,15 +77,28 @@ struct BumpyScene {
 };
 
 /// Bumpy sphere of unit radius (icosphere `level`, bumps of relative height `bumps` and
-/// frequency 5), R_opt green mean free paths, HG g, a W x W image.
-inline BumpyScene make_bumpy_scene(int W, float R_opt, float g, int level = 4, double bumps = 0.06) {
+/// frequency 5), R_opt green mean free paths, HG g, a W x W image. With a non-empty `obj`, that
+/// Wavefront OBJ mesh instead (must be closed; centred on its bounding-box centre and scaled to a
+/// bounding radius of 1, so R_opt is its bounding radius in green mean free paths).
+inline BumpyScene make_bumpy_scene(int W, float R_opt, float g, int level = 4, double bumps = 0.06,
+                                   const std::string& obj = "") {
     BumpyScene s;
     s.R_opt = R_opt;
     s.g = g;
     const float lr[3] = {4.5455f, 3.2258f, 2.1739f};
     const float sc = R_opt * lr[1];
     s.sigma_t = gl::RGB{sc / lr[0], sc / lr[1], sc / lr[2]};
-    s.mesh = gl::make_bumpy_sphere<float>(level, 1.0, bumps, 5.0);
+    if (obj.empty()) {
+        s.mesh = gl::make_bumpy_sphere<float>(level, 1.0, bumps, 5.0);
+    } else {
+        s.mesh = gl::load_obj<float>(obj);
+        const gl::Vec3f c = s.mesh.bounds().center();
+        float r = 0;
+        for (const auto& v : s.mesh.vertices) r = std::max(r, glm::length(v - c));
+        gl::check_argument(r > 0, "make_bumpy_scene", "obj bounding radius", r, "> 0");
+        for (auto& v : s.mesh.vertices) v = (v - c) / r;
+        s.mesh.compute_face_normals();
+    }
     s.shape = gl::ClosedMeshShape<float>(s.mesh);
     s.W = s.H = W;
     s.camera = gl::PinholeCamera<float>(gl::Vec3f(0.0f, 0.3f, 4.2f), gl::Vec3f(0.0f), gl::Vec3f(0, 1, 0), 32.0f, W, W);

@@ -75,3 +75,13 @@ if(TARGET wang18_fig23_surface_samples OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS 
                    -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
   set_tests_properties(wang18_fig23_surface_samples_json PROPERTIES LABELS "example;point_based")
 endif()
+
+# wang18_fig12_components --obj with an open mesh (a tetrahedron missing a face): a clear error,
+# non-zero exit.
+if(TARGET wang18_fig12_components OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/wang18_fig12_components.cpp))
+  file(WRITE ${CMAKE_CURRENT_BINARY_DIR}/wang18_open_tetrahedron.obj "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\n")
+  add_test(NAME wang18_fig12_components_open_mesh
+           COMMAND $<TARGET_FILE:wang18_fig12_components> --obj ${CMAKE_CURRENT_BINARY_DIR}/wang18_open_tetrahedron.obj
+                   --out ${CMAKE_CURRENT_BINARY_DIR}/wang18_fig12_open_mesh)
+  set_tests_properties(wang18_fig12_components_open_mesh PROPERTIES WILL_FAIL TRUE LABELS "example;point_based")
+endif()
