@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "grainlight/integrators/ms_table_quadtree.hpp"
+#include "grainlight/integrators/point_based.hpp"
 #include "grainlight/phase/henyey_greenstein.hpp"
 #include "grainlight/precompute/ms_table.hpp"
 
@@ -80,4 +81,50 @@ TEST_CASE("ms_table_quadtree: bad input", "[ms_quadtree]") {
     CHECK_THROWS_AS(MsTableQuadtree<3>(t, -0.1), std::invalid_argument);
     CHECK_THROWS_AS(MsTableQuadtree<3>(t, std::nan("")), std::invalid_argument);
     CHECK_THROWS_AS(MsTableQuadtree<3>(MsTable<3>{}, 0.0), std::invalid_argument);
+}
+
+TEST_CASE("ms_table_quadtree: eval_dir equals the dense table's; the renderer reading it gives the same image",
+          "[ms_quadtree][point_based]") {
+    const MsTable<3> t = sparse_table();
+    const MsTableQuadtree<3> q(t, 0.0);
+    Rng rng = Rng::from_key(3);
+    for (int i = 0; i < 2000; ++i) {
+        const double rho = 25.0 * rng.uniform<double>(), z = -25.0 + 50.0 * rng.uniform<double>();
+        const double ct = 2 * rng.uniform<double>() - 1, ph = 3.2 * rng.uniform<double>();
+        for (bool interp : {false, true}) {
+            const MsDirection d = t.direction(ct, ph, interp), dq = q.direction(ct, ph, interp);
+            REQUIRE(d.count == dq.count);
+            for (std::size_t c = 0; c < 3; ++c) CHECK(q.eval_dir(c, rho, z, dq) == Approx(t.eval_dir(c, rho, z, d)).margin(1e-12));
+        }
+    }
+    CHECK(q.dense_bytes() == t.bytes());
+    // The renderer: multiple scattering from the dense table and from the quadtree, same samples.
+    const RGB albedo{0.9f, 0.6f, 0.4f};
+    const ContinuousMedium<RGBPhase, RGB> medium(RGB(2.0f), albedo, RGBPhase(0.7f));
+    const SphereShape<float> sphere(Vec3f(0.0f), 1.0f);
+    const QuadShape<float> quad(Vec3f(-3.0f, 2.0f, -3.0f), Vec3f(6, 0, 0), Vec3f(0, 0, 6));
+    PointBasedOptions<float> o;
+    o.single = false;
+    o.double_ = false;
+    o.bounced = false;
+    o.volume_step = 0.2f;
+    Rng r1 = Rng::from_key(9);
+    PointBasedRenderer<RGBPhase, SphereShape<float>> pb(medium, 1.33f, sphere, sphere_surface_samples(sphere, 400),
+                                                         Light<float, RGB>::quad_light(quad, RGB(1.0f)), o, r1, &t);
+    double dense = 0, comp = 0;
+    for (int pass = 0; pass < 2; ++pass) {
+        pb.use_compressed_table(pass == 0 ? nullptr : &q);
+        for (int i = 0; i < 16; ++i) {
+            Rng g = Rng::from_key(11, std::uint64_t(i));
+            const Ray<float> ray(Vec3f(0.05f * float(i % 4), 0.05f * float(i / 4), 5.0f), Vec3f(0, 0, -1));
+            (pass == 0 ? dense : comp) += double(pb.radiance_components(ray, g).multiple.average());
+        }
+    }
+    CHECK(dense > 0);
+    CHECK(comp == Approx(dense).epsilon(1e-6));
+    MsTableOptions few;
+    few.photons = 2000;
+    const MsTable<3> other = MsTable<3>::build(RGBPhase(0.7f), RGB{0.8f, 0.6f, 0.4f}, few);
+    const MsTableQuadtree<3> wrong(other, 0.0);
+    CHECK_THROWS_AS(pb.use_compressed_table(&wrong), grainlight::invalid_argument);
 }

@@ -91,6 +91,72 @@ struct MsDirection {
     int count = 0;
 };
 
+/// The four (z, rho) cells around a point of an MsTableGrid and their bilinear weights (cell
+/// index iz n_rho + ir; weights between cell centres, clamped at the grid's edges).
+struct MsCellCorners {
+    std::size_t cell[4];  ///< cell indices
+    double w[4];          ///< bilinear weights (sum 1)
+};
+
+/// Bilinear corners of (rho, z) (mean free paths) on `grid`; false outside the grid.
+[[nodiscard]] inline bool ms_cell_corners(const MsTableGrid& grid, double rho, double z, MsCellCorners& k) noexcept {
+    if (grid.n_rho == 0 || grid.n_z == 0 || !(rho >= 0) || rho > grid.rho_max || z < grid.z_min || z > grid.z_max)
+        return false;
+    const double fr = rho * (grid.n_rho / grid.rho_max) - 0.5, fz = (z - grid.z_min) * (grid.n_z / (grid.z_max - grid.z_min)) - 0.5;
+    const int r0 = int(std::floor(fr)), z0 = int(std::floor(fz));
+    const double ar = fr - r0, az = fz - z0;
+    const int ra = std::max(r0, 0), rb = std::min(r0 + 1, int(grid.n_rho) - 1);
+    const int za = std::max(z0, 0), zb = std::min(z0 + 1, int(grid.n_z) - 1);
+    const std::size_t nr = grid.n_rho;
+    k.cell[0] = std::size_t(za) * nr + std::size_t(ra);
+    k.cell[1] = std::size_t(za) * nr + std::size_t(rb);
+    k.cell[2] = std::size_t(zb) * nr + std::size_t(ra);
+    k.cell[3] = std::size_t(zb) * nr + std::size_t(rb);
+    k.w[0] = (1 - az) * (1 - ar);
+    k.w[1] = (1 - az) * ar;
+    k.w[2] = az * (1 - ar);
+    k.w[3] = az * ar;
+    return true;
+}
+
+/// Index of the direction bin of (cos_theta, phi) on `grid` (nearest bin).
+[[nodiscard]] inline std::size_t ms_direction_bin(const MsTableGrid& grid, double cos_theta, double phi) noexcept {
+    const double theta = std::acos(std::clamp(cos_theta, -1.0, 1.0));
+    const std::size_t it = std::min<std::size_t>(grid.n_theta - 1, std::size_t(theta / pi_v<double> * grid.n_theta));
+    const std::size_t ip = std::min<std::size_t>(
+        grid.n_phi - 1, std::size_t(std::clamp(phi, 0.0, pi_v<double>) / pi_v<double> * grid.n_phi));
+    return it * grid.n_phi + ip;
+}
+
+/// Direction lookup on `grid`: the nearest bin, or (interpolate) the four bins around
+/// (theta, phi) with bilinear weights between bin centres (clamped at the poles and at
+/// phi = 0, pi, where the mirror image of a bin is the bin itself).
+[[nodiscard]] inline MsDirection ms_direction(const MsTableGrid& grid, double cos_theta, double phi, bool interpolate) noexcept {
+    MsDirection d;
+    if (!interpolate) {
+        d.bin[0] = ms_direction_bin(grid, cos_theta, phi);
+        d.weight[0] = 1.0;
+        d.count = 1;
+        return d;
+    }
+    const double theta = std::acos(std::clamp(cos_theta, -1.0, 1.0));
+    const double ft = theta / pi_v<double> * grid.n_theta - 0.5;
+    const double fp = std::clamp(phi, 0.0, pi_v<double>) / pi_v<double> * grid.n_phi - 0.5;
+    const int t0 = int(std::floor(ft)), p0 = int(std::floor(fp));
+    const double at = ft - t0, ap = fp - p0;
+    const int ta = std::max(t0, 0), tb = std::min(t0 + 1, int(grid.n_theta) - 1);
+    const int pa = std::max(p0, 0), pb = std::min(p0 + 1, int(grid.n_phi) - 1);
+    const int ts[2] = {ta, tb}, ps[2] = {pa, pb};
+    const double wt[2] = {1 - at, at}, wp[2] = {1 - ap, ap};
+    for (int i = 0; i < 2; ++i)
+        for (int j = 0; j < 2; ++j) {
+            d.bin[std::size_t(2 * i + j)] = std::size_t(ts[i]) * grid.n_phi + std::size_t(ps[j]);
+            d.weight[std::size_t(2 * i + j)] = wt[i] * wp[j];
+        }
+    d.count = 4;
+    return d;
+}
+
 /// The table (see the file comment). N = number of channels.
 template <std::size_t N>
 class MsTable {
@@ -158,41 +224,14 @@ public:
 
     /// Index of the direction bin of (cos_theta, phi) (nearest bin).
     [[nodiscard]] std::size_t direction_bin(double cos_theta, double phi) const noexcept {
-        const double theta = std::acos(std::clamp(cos_theta, -1.0, 1.0));
-        const std::size_t it =
-            std::min<std::size_t>(grid_.n_theta - 1, std::size_t(theta / pi_v<double> * grid_.n_theta));
-        const std::size_t ip = std::min<std::size_t>(
-            grid_.n_phi - 1, std::size_t(std::clamp(phi, 0.0, pi_v<double>) / pi_v<double> * grid_.n_phi));
-        return it * grid_.n_phi + ip;
+        return ms_direction_bin(grid_, cos_theta, phi);
     }
 
     /// Direction lookup: the nearest bin, or (interpolate) the four bins around (theta, phi) with
     /// bilinear weights between bin centres (clamped at the poles and at phi = 0, pi, where the
     /// mirror image of a bin is the bin itself).
     [[nodiscard]] MsDirection direction(double cos_theta, double phi, bool interpolate) const noexcept {
-        MsDirection d;
-        if (!interpolate) {
-            d.bin[0] = direction_bin(cos_theta, phi);
-            d.weight[0] = 1.0;
-            d.count = 1;
-            return d;
-        }
-        const double theta = std::acos(std::clamp(cos_theta, -1.0, 1.0));
-        const double ft = theta / pi_v<double> * grid_.n_theta - 0.5;
-        const double fp = std::clamp(phi, 0.0, pi_v<double>) / pi_v<double> * grid_.n_phi - 0.5;
-        const int t0 = int(std::floor(ft)), p0 = int(std::floor(fp));
-        const double at = ft - t0, ap = fp - p0;
-        const int ta = std::max(t0, 0), tb = std::min(t0 + 1, int(grid_.n_theta) - 1);
-        const int pa = std::max(p0, 0), pb = std::min(p0 + 1, int(grid_.n_phi) - 1);
-        const int ts[2] = {ta, tb}, ps[2] = {pa, pb};
-        const double wt[2] = {1 - at, at}, wp[2] = {1 - ap, ap};
-        for (int i = 0; i < 2; ++i)
-            for (int j = 0; j < 2; ++j) {
-                d.bin[std::size_t(2 * i + j)] = std::size_t(ts[i]) * grid_.n_phi + std::size_t(ps[j]);
-                d.weight[std::size_t(2 * i + j)] = wt[i] * wp[j];
-            }
-        d.count = 4;
-        return d;
+        return ms_direction(grid_, cos_theta, phi, interpolate);
     }
 
     /// As eval, with the direction bin j = direction_bin(cos_theta, phi) (bilinear in rho, z).
@@ -273,27 +312,9 @@ public:
     [[nodiscard]] std::size_t bytes() const noexcept { return values_.size() * sizeof(float); }
 
 private:
-    struct Corners {
-        std::size_t cell[4];
-        double w[4];
-    };
+    using Corners = MsCellCorners;
     bool corners(double rho, double z, Corners& k) const noexcept {
-        if (values_.empty() || !(rho >= 0) || rho > grid_.rho_max || z < grid_.z_min || z > grid_.z_max) return false;
-        const double fr = rho * inv_dr_ - 0.5, fz = (z - grid_.z_min) * inv_dz_ - 0.5;
-        const int r0 = int(std::floor(fr)), z0 = int(std::floor(fz));
-        const double ar = fr - r0, az = fz - z0;
-        const int ra = std::max(r0, 0), rb = std::min(r0 + 1, int(grid_.n_rho) - 1);
-        const int za = std::max(z0, 0), zb = std::min(z0 + 1, int(grid_.n_z) - 1);
-        const std::size_t nr = grid_.n_rho;
-        k.cell[0] = std::size_t(za) * nr + std::size_t(ra);
-        k.cell[1] = std::size_t(za) * nr + std::size_t(rb);
-        k.cell[2] = std::size_t(zb) * nr + std::size_t(ra);
-        k.cell[3] = std::size_t(zb) * nr + std::size_t(rb);
-        k.w[0] = (1 - az) * (1 - ar);
-        k.w[1] = (1 - az) * ar;
-        k.w[2] = az * (1 - ar);
-        k.w[3] = az * ar;
-        return true;
+        return !values_.empty() && ms_cell_corners(grid_, rho, z, k);
     }
 
     MsTableGrid grid_{};

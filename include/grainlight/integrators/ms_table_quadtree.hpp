@@ -9,6 +9,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -23,7 +24,8 @@ class MsTableQuadtree {
 public:
     /// Compress `t`; `tolerance` >= 0 relative to the table's largest value (0: lossless).
     /// Throws invalid_argument for a negative or non-finite tolerance or an empty table.
-    explicit MsTableQuadtree(const MsTable<N>& t, double tolerance = 0.0) : grid_(t.grid()) {
+    explicit MsTableQuadtree(const MsTable<N>& t, double tolerance = 0.0)
+        : grid_(t.grid()), albedo_(t.albedos()), g_(t.mean_cosine()), photons_(t.photons()) {
         check_argument(tolerance >= 0.0 && tolerance < 1.0, "MsTableQuadtree", "tolerance", tolerance, "[0, 1)");
         check_argument(!t.empty(), "MsTableQuadtree", "table size", t.size(), ">= 1");
         nd_ = grid_.directions();
@@ -59,6 +61,51 @@ public:
             n = nd.child + qz * 2 + qr;
         }
     }
+    /// The N x directions() lobe values of cell (iz, ir) (channel-major), nullptr in a dropped
+    /// region or outside the grid.
+    [[nodiscard]] const float* cell(std::size_t iz, std::size_t ir) const noexcept {
+        if (iz >= grid_.n_z || ir >= grid_.n_rho) return nullptr;
+        std::uint32_t n = 0, z0 = 0, r0 = 0, s = side_;
+        for (;;) {
+            const Node& nd = nodes_[n];
+            if (nd.child == kEmpty) return nullptr;
+            if (nd.child == kLeaf) return data_.data() + nd.data;
+            s /= 2;
+            const std::uint32_t qz = iz >= z0 + s ? 1u : 0u, qr = ir >= r0 + s ? 1u : 0u;
+            z0 += qz * s;
+            r0 += qr * s;
+            n = nd.child + qz * 2 + qr;
+        }
+    }
+    /// Direction lookup on the table's grid (as MsTable::direction).
+    [[nodiscard]] MsDirection direction(double cos_theta, double phi, bool interpolate) const noexcept {
+        return ms_direction(grid_, cos_theta, phi, interpolate);
+    }
+    /// The table's value at (rho, z) (mean free paths) for the direction lookup d, channel c:
+    /// bilinear in (rho, z) over the stored cells (0 for dropped ones), as MsTable::eval_dir.
+    [[nodiscard]] double eval_dir(std::size_t c, double rho, double z, const MsDirection& d) const noexcept {
+        MsCellCorners k;
+        if (nodes_.empty() || !ms_cell_corners(grid_, rho, z, k)) return 0.0;
+        double s = 0;
+        for (int i = 0; i < 4; ++i) {
+            if (k.w[i] == 0.0) continue;
+            const float* v = cell(k.cell[i] / grid_.n_rho, k.cell[i] % grid_.n_rho);
+            if (!v) continue;
+            v += c * nd_;
+            double x = 0;
+            for (int j = 0; j < d.count; ++j) x += d.weight[std::size_t(j)] * double(v[d.bin[std::size_t(j)]]);
+            s += k.w[i] * x;
+        }
+        return s;
+    }
+    /// Single-scattering albedo of channel c of the source table.
+    [[nodiscard]] double albedo(std::size_t c) const noexcept { return albedo_[c]; }
+    /// Mean cosine g of the source table's phase function.
+    [[nodiscard]] double mean_cosine() const noexcept { return g_; }
+    /// Source particles of the source table.
+    [[nodiscard]] std::uint64_t photons() const noexcept { return photons_; }
+    /// Bytes the dense table would hold (N x cells x directions floats).
+    [[nodiscard]] std::size_t dense_bytes() const noexcept { return N * grid_.cells() * nd_ * sizeof(float); }
     /// Bytes held: nodes plus the stored lobes.
     [[nodiscard]] std::size_t bytes() const noexcept { return nodes_.size() * sizeof(Node) + data_.size() * sizeof(float); }
     /// Number of cells whose lobes are stored.
@@ -106,6 +153,9 @@ private:
     }
 
     MsTableGrid grid_;
+    std::array<double, N> albedo_{};
+    double g_ = 0;
+    std::uint64_t photons_ = 0;
     std::size_t nd_ = 1;
     float threshold_ = 0.0f;
     std::uint32_t side_ = 1;

@@ -71,7 +71,10 @@
 #include "grainlight/core/rng.hpp"
 #include "grainlight/core/warp.hpp"
 #include "grainlight/geometry/aabb.hpp"
+#include "grainlight/geometry/closed_mesh.hpp"
+#include "grainlight/geometry/surface_sampling.hpp"
 #include "grainlight/integrators/ms_table.hpp"
+#include "grainlight/integrators/ms_table_quadtree.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/optics/fresnel.hpp"
 #include "grainlight/phase/concepts.hpp"
@@ -150,6 +153,22 @@ template <std::floating_point F>
         const Vec3<F> nn(F(r * std::cos(ph)), F(r * std::sin(ph)), F(z));
         out[std::size_t(i)] = {s.center + s.radius * nn, nn, s.area() / F(n)};
     }
+    return out;
+}
+
+/// About `n` blue-noise (Poisson-disk, dart throwing) surface samples on a closed mesh boundary
+/// (Sec. 3.4.1), each with the area A / count and its triangle's outward normal; deterministic for
+/// `seed`. `radius_out` receives the Poisson-disk radius. Throws invalid_argument if n < 1 or if
+/// no sample could be placed.
+template <std::floating_point F>
+[[nodiscard]] inline std::vector<SurfaceSample<F>> mesh_surface_samples(const ClosedMeshShape<F>& m, int n,
+                                                                       std::uint64_t seed, double* radius_out = nullptr) {
+    check_argument(n >= 1, "mesh_surface_samples", "n", n, ">= 1");
+    const auto pts = poisson_disk_mesh_points(m.mesh(), n, seed, radius_out);
+    check_argument(!pts.empty(), "mesh_surface_samples", "samples placed", pts.size(), ">= 1");
+    std::vector<SurfaceSample<F>> out(pts.size());
+    const F a = F(m.area() / double(pts.size()));
+    for (std::size_t i = 0; i < pts.size(); ++i) out[i] = {pts[i].p, pts[i].n, a};
     return out;
 }
 
@@ -357,6 +376,21 @@ public:
     /// construction, for studies that compare both on the same light samples (the bounce samples
     /// keep the light they gathered at construction).
     void set_ms_boundary_image(bool on) noexcept { opt_.ms_boundary_image = on; }
+    /// Read the multiple-scattering table from its quadtree-compressed copy `q` from now on
+    /// (Sec. 5.2; the dense table passed to the constructor is no longer read and may be
+    /// released; `q` must outlive the renderer; nullptr: back to the dense table, which must then
+    /// still exist). The bounce samples keep the light they gathered at construction. Throws
+    /// invalid_argument if q's albedo is not the medium's.
+    void use_compressed_table(const MsTableQuadtree<N>* q) {
+        if (q) {
+            for (std::size_t c = 0; c < N; ++c)
+                check_argument(std::abs(q->albedo(c) - double(medium_.albedo()[c])) < 1e-4, "PointBasedRenderer",
+                               "compressed ms table albedo", q->albedo(c), "the medium's albedo");
+        }
+        msq_ = q;
+    }
+    /// True if a multiple-scattering table (dense or compressed) is in use.
+    [[nodiscard]] bool has_table() const noexcept { return msq_ != nullptr || ms_ != nullptr; }
     /// Octree of the bounce surface samples (Eq. 8): p = position, d = inward normal, w = I_j =
     /// A_j M_j / pi (M_j: radiant exitance of the light reflected inward at the sample).
     [[nodiscard]] const Octree<F, S>& surface_tree() const noexcept { return surf_tree_; }
@@ -433,7 +467,6 @@ public:
         const Phase& ph = medium_.phase();
         auto pval = [&](const Vec3<F>& a, const Vec3<F>& b) { return F(ph.eval(a, b).value.average()); };
         const S sig_s = medium_.sigma_s();
-        const S& sig_t = medium_.sigma_t();
         auto contrib = [&](const Vec3<F>& xv, const Vec3<F>& dv, const S& wv, F coherence, F c_view) {
             const Vec3<F> rv = P - xv;
             const F r = glm::length(rv);
@@ -444,7 +477,7 @@ public:
                 const F k = inverse_square_ball(r, r_min_);
                 dbl += sig_s * sig_s * wv * medium_.transmittance(r) * pp * k;
             }
-            if (opt_.multiple && ms_) {
+            if (opt_.multiple && has_table()) {
                 S m = table_response(rv, dv, to_cam);
                 if constexpr (TangentPlaneBoundary<Boundary, F>) {
                     if (opt_.ms_boundary_image) {
@@ -491,9 +524,13 @@ public:
         const F rho = glm::length(rv - z * dv);
         for (std::size_t c = 0; c < S::size; ++c) {
             const F st = medium_.sigma_t()[c];
-            m[c] = F(ms_->eval_dir(c, double(rho * st), double(z * st), dir)) * st * st * st;
+            m[c] = F(table_eval(c, double(rho * st), double(z * st), dir)) * st * st * st;
         }
         return m;
+    }
+    /// The table value (dense or compressed) of channel c at (rho, z) in mean free paths.
+    [[nodiscard]] double table_eval(std::size_t c, double rho, double z, const MsDirection& dir) const noexcept {
+        return msq_ ? msq_->eval_dir(c, rho, z, dir) : ms_->eval_dir(c, rho, z, dir);
     }
     /// One channel c of table_response() (c < the spectrum size; not checked).
     [[nodiscard]] F table_response_channel(std::size_t c, const Vec3<F>& rv, const Vec3<F>& dv,
@@ -502,7 +539,7 @@ public:
         const F z = glm::dot(rv, dv);
         const F rho = glm::length(rv - z * dv);
         const F st = medium_.sigma_t()[c];
-        return F(ms_->eval_dir(c, double(rho * st), double(z * st), dir)) * st * st * st;
+        return F(table_eval(c, double(rho * st), double(z * st), dir)) * st * st * st;
     }
     /// Multiple-scattering table direction bin of the exit direction `to_cam`, in the frame of a source
     /// at offset rv travelling along dv (cos theta about dv, phi from the radial direction folded to
@@ -515,7 +552,8 @@ public:
         const Vec3<F> ey = glm::cross(dv, ex);
         const F cz = glm::dot(to_cam, dv);
         const F phi = std::atan2(std::abs(glm::dot(to_cam, ey)), glm::dot(to_cam, ex));
-        return ms_->direction(double(cz), double(phi), opt_.ms_interpolate);
+        return msq_ ? msq_->direction(double(cz), double(phi), opt_.ms_interpolate)
+                    : ms_->direction(double(cz), double(phi), opt_.ms_interpolate);
     }
 
     /// Phase value for light arriving along the mean direction d of a node whose unit directions
@@ -848,25 +886,17 @@ private:
         }
     }
 
-    /// Exact segment/OBB overlap [t0, t1] within [0, tmax]; false if none.
+    /// Exact segment/OBB overlap [t0, t1] within [0, tmax]; false if none (or if the segment
+    /// only touches the box: the overlap then carries no light). The segment is moved into the
+    /// box's frame (e1, e2, d) and clipped by the library's slab test (geometry/aabb.hpp).
     static bool clip_box(const Box& b, const Vec3<F>& o, const Vec3<F>& w, F tmax, F& t0, F& t1) noexcept {
         t0 = F(0);
         t1 = tmax;
         const Vec3<F> rel = o - b.c;
-        const std::array<std::pair<Vec3<F>, F>, 3> ax{{{b.e1, b.h1}, {b.e2, b.h2}, {b.d, b.hd}}};
-        for (const auto& [a, h] : ax) {
-            const F p = glm::dot(rel, a), v = glm::dot(w, a);
-            if (std::abs(v) < F(1e-12)) {
-                if (std::abs(p) > h) return false;
-                continue;
-            }
-            F ta = (-h - p) / v, tb = (h - p) / v;
-            if (ta > tb) std::swap(ta, tb);
-            t0 = std::max(t0, ta);
-            t1 = std::min(t1, tb);
-            if (t0 >= t1) return false;
-        }
-        return true;
+        const Vec3<F> ol(glm::dot(rel, b.e1), glm::dot(rel, b.e2), glm::dot(rel, b.d));
+        const Vec3<F> wl(glm::dot(w, b.e1), glm::dot(w, b.e2), glm::dot(w, b.d));
+        const Vec3<F> h(b.h1, b.h2, b.hd);
+        return clip_ray_to_box(ol, wl, -h, h, t0, t1) && t0 < t1;
     }
 
     void gather_segment(const Vec3<F>& o, const Vec3<F>& w, F dmax, const S& weight, Rng& rng,
@@ -895,7 +925,7 @@ private:
             out.single += weight * sig_s * acc;
         }
         const bool bounced = with_bounced && !surf_tree_.items().empty();
-        const bool prim = primary && (opt_.double_ || (opt_.multiple && ms_));
+        const bool prim = primary && (opt_.double_ || (opt_.multiple && has_table()));
         if (!(prim || bounced)) return;
         const F sb = sigma_bar_;
         const F norm = -std::expm1(-sb * dmax);  // 1 - exp(-sigma dmax)
@@ -931,6 +961,7 @@ private:
     Boundary boundary_;
     PointBasedOptions<F> opt_;
     const MsTable<N>* ms_;
+    const MsTableQuadtree<N>* msq_ = nullptr;
     F sigma_bar_ = F(1), step_ = F(0.1), r_min_ = F(0.1);
     std::array<F, S::size> image_offset_{};  ///< ms_image_offset in scene units per channel
     Octree<F, S> tree_;

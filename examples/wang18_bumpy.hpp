@@ -1,0 +1,422 @@
+// Shared scene and measurement of the Wang18 bumpy-sphere examples (wang18_fig12_components and
+// the sweeps wang18_fig14_mse_vs_g, wang18_fig22_cost_vs_g, wang18_fig23_surface_samples,
+// wang18_fig24_epsilon):
+//  - the scene: a bumpy sphere (geometry/surface_sampling.hpp make_bumpy_sphere: a radially
+//    displaced icosphere, the stand-in for the paper's "Bumpy sphere" mesh) as the refractive
+//    boundary (eta 1.33, geometry/closed_mesh.hpp ClosedMeshShape) filled with the paper's
+//    "Bumpy sphere" material (Table 2: albedo {0.9545, 0.6774, 0.4565}, mean free path ratios
+//    {4.5455, 3.2258, 2.1739}), scaled so the radius is `R_opt` green mean free paths, under a
+//    quad light;
+//  - the point-based render (integrators/point_based.hpp over the mesh, Poisson-disk surface
+//    samples), per component;
+//  - the reference: the library's VPT (walk kernel) through the same mesh, one grey walk per
+//    colour channel, no path-length cap (Russian roulette only), kBatches batches, split by the
+//    number of scattering events and by boundary reflections between events (the bounced
+//    term's path space), as in wang18_point_based;
+//  - the comparison as in ../shared/reference/measuring.md: bias with its standard error from
+//    the batches, per-component error e^2 = MSE - the reference's variance of the mean, and the
+//    equal-error speed-up (reference time to reach e^2 over the point-based time, CPU seconds).
+#pragma once
+
+#include <time.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "common/harness.hpp"
+#include "grainlight/geometry/closed_mesh.hpp"
+#include "grainlight/geometry/surface_sampling.hpp"
+#include "grainlight/integrators/point_based.hpp"
+#include "grainlight/integrators/walk.hpp"
+#include "grainlight/media/continuous.hpp"
+#include "grainlight/phase/henyey_greenstein.hpp"
+#include "grainlight/precompute/ms_table.hpp"
+#include "grainlight/scene/camera.hpp"
+#include "grainlight/scene/image_io.hpp"
+#include "grainlight/scene/scene.hpp"
+
+namespace wang18 {
+
+namespace gl = grainlight;
+
+using Phase = gl::HenyeyGreenstein<float, gl::RGB>;
+using Medium = gl::ContinuousMedium<Phase, gl::RGB>;
+using MeshRenderer = gl::PointBasedRenderer<Phase, gl::ClosedMeshShape<float>>;
+using Grey = gl::Spectrum<1, float>;
+using PhaseG = gl::HenyeyGreenstein<float, Grey>;
+using MediumG = gl::ContinuousMedium<PhaseG, Grey>;
+using SceneG = gl::Scene<MediumG>;
+
+constexpr int kComp = 5;  // single, double, multiple, bounced, total
+inline const char* const kCompName[kComp] = {"single", "double", "multiple", "bounced", "total"};
+constexpr int kBatches = 8;
+
+/// Process CPU seconds (all threads).
+inline double cpu_seconds() {
+    timespec ts{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+/// The bumpy-sphere scene.
+struct BumpyScene {
+    float R_opt = 20, g = 0.7f, eta = 1.33f, Le = 4.0f;
+    gl::RGB albedo{0.9545f, 0.6774f, 0.4565f};
+    gl::RGB sigma_t{1.0f};
+    gl::TriangleMesh<float> mesh;
+    gl::ClosedMeshShape<float> shape;
+    gl::QuadShape<float> quad{gl::Vec3f(-2.0f, 2.5f, -2.5f), gl::Vec3f(4, 0, 0), gl::Vec3f(0, 0, 4)};
+    gl::PinholeCamera<float> camera{gl::Vec3f(0.0f, 0.3f, 4.2f), gl::Vec3f(0.0f), gl::Vec3f(0, 1, 0), 32.0f, 16, 16};
+    int W = 16, H = 16;
+    [[nodiscard]] Medium medium() const { return Medium(sigma_t, albedo, Phase(g)); }
+};
+
+/// Bumpy sphere of unit radius (icosphere `level`, bumps of relative height `bumps` and
+/// frequency 5), R_opt green mean free paths, HG g, a W x W image. With a non-empty `obj`, that
+/// Wavefront OBJ mesh instead (must be closed; centred on its bounding-box centre and scaled to a
+/// bounding radius of 1, so R_opt is its bounding radius in green mean free paths).
+inline BumpyScene make_bumpy_scene(int W, float R_opt, float g, int level = 4, double bumps = 0.06,
+                                   const std::string& obj = "") {
+    BumpyScene s;
+    s.R_opt = R_opt;
+    s.g = g;
+    const float lr[3] = {4.5455f, 3.2258f, 2.1739f};
+    const float sc = R_opt * lr[1];
+    s.sigma_t = gl::RGB{sc / lr[0], sc / lr[1], sc / lr[2]};
+    if (obj.empty()) {
+        s.mesh = gl::make_bumpy_sphere<float>(level, 1.0, bumps, 5.0);
+    } else {
+        s.mesh = gl::load_obj<float>(obj);
+        const gl::Vec3f c = s.mesh.bounds().center();
+        float r = 0;
+        for (const auto& v : s.mesh.vertices) r = std::max(r, glm::length(v - c));
+        gl::check_argument(r > 0, "make_bumpy_scene", "obj bounding radius", r, "> 0");
+        for (auto& v : s.mesh.vertices) v = (v - c) / r;
+        s.mesh.compute_face_normals();
+    }
+    s.shape = gl::ClosedMeshShape<float>(s.mesh);
+    s.W = s.H = W;
+    s.camera = gl::PinholeCamera<float>(gl::Vec3f(0.0f, 0.3f, 4.2f), gl::Vec3f(0.0f), gl::Vec3f(0, 1, 0), 32.0f, W, W);
+    return s;
+}
+
+/// Point-based options of the bumpy-sphere examples (thick medium: no internal-reflection
+/// following on light and camera rays, as wang18_point_based's thick case).
+inline gl::PointBasedOptions<float> default_options(const BumpyScene& sc, bool full) {
+    gl::PointBasedOptions<float> po;
+    po.light_samples = 2;
+    po.volume_step = 0.2f / sc.sigma_t.average();
+    po.k_max = full ? 16 : 6;
+    po.camera_bounces = 0;
+    po.light_bounces = 0;
+    po.max_optical_depth = 8.0f;
+    po.cut.eps1 = full ? 0.2f : 1.0f;
+    po.cut.eps2 = 0.2f * po.cut.eps1;
+    po.two_step_depth = 3;
+    po.bounce_samples = full ? 4096 : 512;
+    po.bounce_rays = full ? 8 : 4;
+    po.bounce_k_max = full ? 6 : 3;
+    return po;
+}
+
+/// The multiple-scattering table of the material with HG g (Eq. 7), built once and cached in
+/// `dir` keyed by its parameters. `cpu` receives the build (or load) CPU seconds.
+inline gl::MsTable<3> cached_table(const std::filesystem::path& dir, const BumpyScene& sc, bool full, std::uint64_t seed,
+                                   double& cpu, bool& cached) {
+    gl::MsTableOptions to;
+    to.n_rho = full ? 96 : 48;
+    to.n_z = full ? 192 : 96;
+    to.n_theta = full ? 18 : 12;
+    to.n_phi = full ? 9 : 6;
+    to.rho_max = 10;
+    to.z_min = -10;
+    to.z_max = 10;
+    to.photons = full ? 2000000 : 200000;
+    to.seed = seed;
+    char gbuf[32];
+    std::snprintf(gbuf, sizeof gbuf, "%.3f", double(sc.g));
+    const auto path = dir / ("wang18_ms_table_g" + std::string(gbuf) + "_bmps_" + std::to_string(to.n_rho) + "x" +
+                             std::to_string(to.n_z) + "x" + std::to_string(to.n_theta) + "x" + std::to_string(to.n_phi) +
+                             "_" + std::to_string(to.photons) + "_s" + std::to_string(seed) + ".bin");
+    const double c0 = cpu_seconds();
+    gl::MsTable<3> table;
+    cached = false;
+    if (std::filesystem::exists(path)) {
+        try {
+            table = gl::MsTable<3>::load(path);
+            cached = true;
+        } catch (const std::exception&) {
+            cached = false;
+        }
+    }
+    if (!cached) {
+        table = gl::MsTable<3>::build(Phase(sc.g), sc.albedo, to);
+        table.save(path);
+    }
+    cpu = cpu_seconds() - c0;
+    return table;
+}
+
+/// Mean of an RGB image over pixels and channels.
+inline double image_mean(const gl::Image& a) { return (a.mean(0) + a.mean(1) + a.mean(2)) / 3.0; }
+
+/// A point-based render: one image per component, CPU times, sample counts.
+struct PbRun {
+    std::vector<gl::Image> img;
+    double cpu_samples = 0, cpu_render = 0;
+    std::size_t volume_samples = 0, bytes = 0;
+    double poisson_radius = 0;
+    int surface_samples = 0;
+    [[nodiscard]] double cpu_total() const { return cpu_samples + cpu_render; }
+};
+
+/// Build the light samples (Poisson-disk surface samples on the mesh, `n_surface` of them, and
+/// `po.bounce_samples` bounce samples) and render every pixel with `rays` camera rays; with
+/// `compressed`, the camera rays read the table from its quadtree (the bounce samples are built
+/// from the dense one).
+inline PbRun render_pb(const gl_examples::Example& ex, const BumpyScene& sc, const gl::MsTable<3>* table,
+                       const gl::PointBasedOptions<float>& po, int n_surface, std::uint64_t seed,
+                       const std::string& label, int rays = 1, const gl::MsTableQuadtree<3>* compressed = nullptr) {
+    PbRun r;
+    r.img.assign(kComp, gl::Image(sc.W, sc.H));
+    double c0 = cpu_seconds();
+    gl::Rng lrng = gl::Rng::from_key(seed, 0x5742u);
+    const auto surf = gl::mesh_surface_samples(sc.shape, n_surface, seed, &r.poisson_radius);
+    r.surface_samples = int(surf.size());
+    const auto bounce = po.bounce_samples > 0 ? gl::mesh_surface_samples(sc.shape, po.bounce_samples, seed + 17)
+                                              : std::vector<gl::SurfaceSample<float>>{};
+    MeshRenderer pb(sc.medium(), sc.eta, sc.shape, surf, gl::Light<float, gl::RGB>::quad_light(sc.quad, gl::RGB(sc.Le)), po,
+                    lrng, table, bounce);
+    if (compressed) pb.use_compressed_table(compressed);
+    r.cpu_samples = cpu_seconds() - c0;
+    r.volume_samples = pb.volume_sample_count();
+    r.bytes = pb.bytes();
+    c0 = cpu_seconds();
+    (void)ex.parallel<int>(
+        label, std::uint64_t(sc.H), 1,
+        [&](std::uint64_t, std::uint64_t y0, std::uint64_t y1) {
+            for (std::uint64_t y = y0; y < y1; ++y)
+                for (int x = 0; x < sc.W; ++x) {
+                    gl::PointBasedComponents<gl::RGB> acc;
+                    for (int k = 0; k < rays; ++k) {
+                        gl::Rng rng = gl::Rng::from_key(seed, y * std::uint64_t(sc.W) + std::uint64_t(x), 0x10000u + std::uint64_t(k));
+                        const gl::Vec2f u = rng.uniform2<float>();
+                        const auto c = pb.radiance_components(sc.camera.generate_ray(float(x) + u.x, float(y) + u.y), rng);
+                        acc.single += c.single;
+                        acc.double_ += c.double_;
+                        acc.multiple += c.multiple;
+                        acc.bounced += c.bounced;
+                    }
+                    const float inv = 1.0f / float(rays);
+                    for (int ch = 0; ch < 3; ++ch) {
+                        const float v[4] = {acc.single[ch], acc.double_[ch], acc.multiple[ch], acc.bounced[ch]};
+                        for (int k = 0; k < 4; ++k) r.img[std::size_t(k)].at(x, int(y), ch) = v[k] * inv;
+                        r.img[4].at(x, int(y), ch) = (v[0] + v[1] + v[2] + v[3]) * inv;
+                    }
+                }
+            return 0;
+        },
+        [](int&, int) {});
+    r.cpu_render = cpu_seconds() - c0;
+    return r;
+}
+
+/// Average of independent point-based runs (different light-sample seeds): images averaged, CPU
+/// times and memory summed; `build_se[k]` receives the standard error of component k's image mean
+/// over the runs (the point-based estimate's own noise; 0 for one run).
+inline PbRun average_runs(const std::vector<PbRun>& runs, std::array<double, kComp>& build_se) {
+    PbRun a = runs.front();
+    build_se.fill(0.0);
+    const double n = double(runs.size());
+    for (int k = 0; k < kComp; ++k) {
+        std::vector<double> m;
+        for (const auto& r : runs) m.push_back(image_mean(r.img[std::size_t(k)]));
+        double mu = 0, v = 0;
+        for (double x : m) mu += x / n;
+        for (double x : m) v += runs.size() > 1 ? (x - mu) * (x - mu) / (n - 1) : 0.0;
+        build_se[std::size_t(k)] = std::sqrt(v / n);
+        for (int y = 0; y < a.img[0].height; ++y)
+            for (int x = 0; x < a.img[0].width; ++x)
+                for (int ch = 0; ch < 3; ++ch) {
+                    double s = 0;
+                    for (const auto& r : runs) s += r.img[std::size_t(k)].at(x, y, ch);
+                    a.img[std::size_t(k)].at(x, y, ch) = float(s / n);
+                }
+    }
+    a.cpu_samples = a.cpu_render = 0;
+    a.bytes = 0;
+    for (const auto& r : runs) {
+        a.cpu_samples += r.cpu_samples;
+        a.cpu_render += r.cpu_render;
+        a.bytes = std::max(a.bytes, r.bytes);
+    }
+    return a;
+}
+
+/// VPT callbacks: scattered light by number of scattering events; paths with a boundary
+/// reflection between two scattering events go to `bounced`.
+struct SplitVpt {
+    const SceneG& scene;
+    int count = 0;
+    bool bounced_between = false;
+    std::array<float, 4> L{0, 0, 0, 0};
+    bool on_scatter(gl::PathState<float, Grey>& st, const gl::Interaction<float, Grey>&, const MediumG&) noexcept {
+        ++count;
+        if (count >= 2 && st.specular) bounced_between = true;
+        return true;
+    }
+    bool on_surface(gl::PathState<float, Grey>& st, const gl::SurfaceHit<float, Grey>& hit) noexcept {
+        if (hit.light < 0 || count == 0) return true;
+        const float c = (st.throughput * scene.emitted(hit, st.ray.d))[0];
+        L[std::size_t(bounced_between ? 3 : std::min(count, 3) - 1)] += c;
+        return true;
+    }
+};
+
+/// The VPT reference: batch sums bs[((k * kBatches + b) * npx + p) * 3 + ch] of component k.
+struct VptRun {
+    std::vector<double> bs;
+    std::vector<gl::Image> img;  ///< mean image per component
+    double cpu = 0;
+    int spp = 0, W = 0, H = 0;
+    [[nodiscard]] std::size_t idx(int k, int b, std::size_t p, int ch) const {
+        return ((std::size_t(k) * kBatches + std::size_t(b)) * std::size_t(W * H) + p) * 3 + std::size_t(ch);
+    }
+};
+
+/// Render the reference with `spp` samples per pixel and channel (a multiple of kBatches).
+inline VptRun render_vpt(const gl_examples::Example& ex, const BumpyScene& sc, int spp, std::uint64_t seed,
+                         const std::string& label) {
+    VptRun v;
+    v.spp = spp;
+    v.W = sc.W;
+    v.H = sc.H;
+    std::vector<SceneG> scenes;
+    const gl::MeshShape<float> mshape(sc.mesh);
+    for (int ch = 0; ch < 3; ++ch) {
+        SceneG s;
+        const int m = s.add_medium(MediumG(Grey(sc.sigma_t[ch]), Grey(sc.albedo[ch]), PhaseG(sc.g)));
+        s.add_shape(mshape, gl::Material<float, Grey>::dielectric(sc.eta), m, -1);
+        s.add_quad_light(sc.quad, Grey(sc.Le));
+        scenes.push_back(std::move(s));
+    }
+    const std::size_t npx = std::size_t(sc.W) * std::size_t(sc.H);
+    v.bs.assign(std::size_t(kComp) * kBatches * npx * 3, 0.0);
+    gl::WalkOptions<float> wo;  // no max_depth cap; Russian roulette after 5 events
+    const double c0 = cpu_seconds();
+    (void)ex.parallel<int>(
+        label, std::uint64_t(sc.H), 1,
+        [&](std::uint64_t, std::uint64_t y0, std::uint64_t y1) {
+            for (std::uint64_t y = y0; y < y1; ++y)
+                for (int x = 0; x < sc.W; ++x) {
+                    const std::size_t p = std::size_t(y) * std::size_t(sc.W) + std::size_t(x);
+                    for (int ch = 0; ch < 3; ++ch)
+                        for (int s = 0; s < spp; ++s) {
+                            gl::Rng rng = gl::Rng::from_key(seed, p, std::uint64_t(s) * 3 + std::uint64_t(ch));
+                            const gl::Vec2f u = rng.uniform2<float>();
+                            SplitVpt cb{scenes[std::size_t(ch)]};
+                            auto st = gl::start_path<float, Grey>(sc.camera.generate_ray(float(x) + u.x, float(y) + u.y), -1);
+                            (void)gl::walk(scenes[std::size_t(ch)], st, rng, cb, wo);
+                            const int b = s % kBatches;
+                            double tot = 0;
+                            for (int k = 0; k < 4; ++k) {
+                                v.bs[v.idx(k, b, p, ch)] += cb.L[std::size_t(k)];
+                                tot += cb.L[std::size_t(k)];
+                            }
+                            v.bs[v.idx(4, b, p, ch)] += tot;
+                        }
+                }
+            return 0;
+        },
+        [](int&, int) {});
+    v.cpu = cpu_seconds() - c0;
+    v.img.assign(kComp, gl::Image(sc.W, sc.H));
+    for (int k = 0; k < kComp; ++k)
+        for (std::size_t p = 0; p < npx; ++p)
+            for (int ch = 0; ch < 3; ++ch) {
+                double s = 0;
+                for (int b = 0; b < kBatches; ++b) s += v.bs[v.idx(k, b, p, ch)];
+                v.img[std::size_t(k)].at(int(p % std::size_t(sc.W)), int(p / std::size_t(sc.W)), ch) = float(s / double(spp));
+            }
+    return v;
+}
+
+/// Point-based vs reference, per component (measuring.md).
+struct Comparison {
+    double pb[kComp]{}, ref[kComp]{}, ref_se[kComp]{}, rel[kComp]{}, rel_se[kComp]{};
+    double mse[kComp]{};   ///< per-pixel MSE against the reference mean image
+    double e2[kComp]{};    ///< MSE minus the reference's variance of the mean (>= 1e-3 MSE)
+    double ref_var_mean[kComp]{};  ///< reference variance of the mean, averaged over pixels
+    double ref_var_per_sample = 0, var_half_ratio = 0, speedup = 0, bounced_share = 0;
+};
+
+/// Compare a point-based run with the reference; the equal-error speed-up is on the total.
+inline Comparison compare(const PbRun& pb, const VptRun& v) {
+    Comparison c;
+    const std::size_t npx = std::size_t(v.W) * std::size_t(v.H);
+    const double per_batch = double(v.spp) / kBatches;
+    for (int k = 0; k < kComp; ++k) {
+        double bm[kBatches]{};
+        for (int b = 0; b < kBatches; ++b) {
+            double s = 0;
+            for (std::size_t i = 0; i < npx * 3; ++i) s += v.bs[v.idx(k, b, 0, 0) + i];
+            bm[b] = s / (per_batch * double(npx * 3));
+        }
+        double m = 0, var = 0;
+        for (double x : bm) m += x / kBatches;
+        for (double x : bm) var += (x - m) * (x - m) / (kBatches - 1);
+        c.ref[k] = m;
+        c.ref_se[k] = std::sqrt(var / kBatches);
+        c.pb[k] = image_mean(pb.img[std::size_t(k)]);
+        c.rel[k] = m > 0 ? (c.pb[k] - m) / m : 0.0;
+        c.rel_se[k] = m > 0 ? c.ref_se[k] / m : 0.0;
+        double mse = 0, vm = 0, vps[2] = {0, 0};
+        for (std::size_t p = 0; p < npx; ++p)
+            for (int ch = 0; ch < 3; ++ch) {
+                double b8[kBatches], mean = 0;
+                for (int b = 0; b < kBatches; ++b) {
+                    b8[b] = v.bs[v.idx(k, b, p, ch)] / per_batch;
+                    mean += b8[b] / kBatches;
+                }
+                double vv = 0;
+                for (int b = 0; b < kBatches; ++b) vv += (b8[b] - mean) * (b8[b] - mean) / (kBatches - 1);
+                for (int h = 0; h < 2; ++h) {
+                    double mh = 0, vh = 0;
+                    for (int b = h * kBatches / 2; b < (h + 1) * kBatches / 2; ++b) mh += b8[b] / (kBatches / 2);
+                    for (int b = h * kBatches / 2; b < (h + 1) * kBatches / 2; ++b)
+                        vh += (b8[b] - mh) * (b8[b] - mh) / (kBatches / 2 - 1);
+                    vps[h] += vh * per_batch;
+                }
+                const double d = double(pb.img[std::size_t(k)].at(int(p % std::size_t(v.W)), int(p / std::size_t(v.W)), ch)) - mean;
+                mse += d * d;
+                vm += vv / kBatches;
+            }
+        const double n3 = double(npx * 3);
+        c.mse[k] = mse / n3;
+        c.ref_var_mean[k] = vm / n3;
+        c.e2[k] = std::max(c.mse[k] - c.ref_var_mean[k], 1e-3 * c.mse[k]);
+        if (k == 4) {
+            c.ref_var_per_sample = c.ref_var_mean[k] * double(v.spp);
+            c.var_half_ratio = vps[1] > 0 ? vps[0] / vps[1] : 0.0;
+        }
+    }
+    c.bounced_share = c.ref[4] > 0 ? c.ref[3] / c.ref[4] : 0.0;
+    // Reference time to the point-based error e^2 of the total: (per-sample variance / e^2)
+    // samples per pixel at the measured CPU seconds per pixel sample (three channel walks).
+    const double t_ref = c.ref_var_per_sample / c.e2[4] * (v.cpu / double(v.spp));
+    c.speedup = pb.cpu_total() > 0 ? t_ref / pb.cpu_total() : 0.0;
+    return c;
+}
+
+/// Write `img` as EXR and PNG (exposure `exposure`) into `dir`.
+inline void save_image(const std::filesystem::path& dir, const std::string& name, const gl::Image& img, double exposure) {
+    gl::write_exr(dir / (name + ".exr"), img);
+    gl::write_png(dir / (name + ".png"), img, {exposure});
+}
+
+}  // namespace wang18
