@@ -17,24 +17,25 @@
 // Speed-up at equal error as in ../shared/reference/measuring.md: CPU time, the reference's
 // per-sample variance from its batches, the point-based error e^2 = MSE - reference variance.
 //
+// Runs on the example harness (common/harness.hpp) with the measurement shared with the
+// bumpy-sphere examples (wang18_bumpy.hpp). Outputs in --out: EXR + PNG of every component,
+// wang18_point_based.csv (component means) with its plot wang18_point_based_components.png
+// (examples/plots/wang18_point_based.py), and the JSON summary as the last stdout line; with
+// --bias-study, wang18_point_based_bias_study.csv.
+//
 //   wang18_point_based [--quality quick|full] [--out DIR] [--seed S] [--threads N]
-//                      [--vpt-spp N] [--surface-samples N] [--bias-study]
-#include <time.h>
-
+//                      [--vpt-spp N] [--surface-samples N] [--eps1 E] [--bounce-samples N]
+//                      [--bounce-generations 1|2] [--bias-study]
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <cstdlib>
-#include <iostream>
 #include <string>
+#include <utility>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
-#include "common/progress.hpp"
+#include "common/harness.hpp"
 #include "grainlight/integrators/point_based.hpp"
 #include "grainlight/integrators/walk.hpp"
 #include "grainlight/media/continuous.hpp"
@@ -43,54 +44,34 @@
 #include "grainlight/scene/camera.hpp"
 #include "grainlight/scene/image_io.hpp"
 #include "grainlight/scene/scene.hpp"
-
-#if defined(_OPENMP)
-#include <omp.h>
-#endif
+#include "wang18_bumpy.hpp"
 
 namespace gl = grainlight;
 
 namespace {
 
-using Phase = gl::HenyeyGreenstein<float, gl::RGB>;
-using Medium = gl::ContinuousMedium<Phase, gl::RGB>;
+// The measurement (VPT split callbacks, batch layout, comparison, CPU clock) is the one shared
+// with the bumpy-sphere examples (wang18_bumpy.hpp); only the shape differs (an analytic sphere).
+using wang18::cpu_seconds;
+using wang18::Grey;
+using wang18::image_mean;
+using wang18::kBatches;
+using wang18::kComp;
+using wang18::kCompName;
+using wang18::MediumG;
+using wang18::Phase;
+using wang18::PhaseG;
+using wang18::SceneG;
+using wang18::SplitVpt;
+using Medium = wang18::Medium;
 using Renderer = gl::PointBasedRenderer<Phase, gl::SphereShape<float>>;
-using Grey = gl::Spectrum<1, float>;
-using PhaseG = gl::HenyeyGreenstein<float, Grey>;
-using MediumG = gl::ContinuousMedium<PhaseG, Grey>;
-using SceneG = gl::Scene<MediumG>;
 
-constexpr int kComp = 5;  // single, double, multiple, bounced, total
-const char* const kCompName[kComp] = {"single", "double", "multiple", "bounced", "total"};
-constexpr int kBatches = 8;
-
-double g_eps1 = 0;  // Alg. 1 solid-angle threshold (--eps1; 0: the quality default)
-int g_bounce_samples = 0;  // bounce surface samples (--bounce-samples; 0: the quality default)
-
-double cpu_seconds() {
-    timespec ts{};
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-}
-
-// VPT callbacks: scattered light by number of scattering events; paths with a boundary
-// reflection between two scattering events go to `bounced`.
-struct SplitVpt {
-    const SceneG& scene;
-    int count = 0;
-    bool bounced_between = false;
-    std::array<float, 4> L{0, 0, 0, 0};
-    bool on_scatter(gl::PathState<float, Grey>& st, const gl::Interaction<float, Grey>&, const MediumG&) noexcept {
-        ++count;
-        if (count >= 2 && st.specular) bounced_between = true;
-        return true;
-    }
-    bool on_surface(gl::PathState<float, Grey>& st, const gl::SurfaceHit<float, Grey>& hit) noexcept {
-        if (hit.light < 0 || count == 0) return true;
-        const float c = (st.throughput * scene.emitted(hit, st.ray.d))[0];
-        L[bounced_between ? 3 : std::min(count, 3) - 1] += c;
-        return true;
-    }
+/// Run parameters (from the command line).
+struct Params {
+    bool full = false;
+    int vpt_spp = 512, n_surface = 6000, bounce_generations = 2, bounce_samples = 512;
+    double eps1 = 1.0;  ///< Alg. 1 solid-angle threshold (sr)
+    std::uint64_t seed = 1;
 };
 
 struct Case {
@@ -99,19 +80,17 @@ struct Case {
 };
 
 struct CaseResult {
-    double pb[kComp]{}, ref[kComp]{}, ref_se[kComp]{}, rel[kComp]{}, rel_se[kComp]{};
+    wang18::Comparison cmp;  // point-based vs reference (pb, ref, ref_se, rel, rel_se, e2, speed-up)
     double pb_multiple_image = 0, rel_multiple_image = 0;
-    double cpu_pb = 0, cpu_samples = 0, cpu_vpt = 0, e2 = 0, ref_var_mean = 0, ref_var_per_sample = 0;
-    double var_half_ratio = 0, speedup = 0, bounced_share = 0, bounce_ratio = 0;
+    double cpu_pb = 0, cpu_samples = 0, cpu_vpt = 0, bounce_ratio = 0;
     std::size_t volume_samples = 0;
     int spp = 0;
 };
 
-double image_mean(const gl::Image& a) { return (a.mean(0) + a.mean(1) + a.mean(2)) / 3.0; }
-
-CaseResult run_case(const Case& cs, const gl::MsTable<3>& table, bool full, int vpt_spp, int n_surface, int threads,
-                    std::uint64_t seed, const std::filesystem::path& out, bool study, int bounce_generations) {
-    (void)threads;
+CaseResult run_case(const gl_examples::Example& ex, const Case& cs, const gl::MsTable<3>& table, const Params& prm,
+                    bool study) {
+    const bool full = prm.full;
+    const std::uint64_t seed = prm.seed;
     const int W = full ? 96 : 40, H = W;
     const gl::RGB albedo{0.9545f, 0.6774f, 0.4565f};
     const float lr[3] = {4.5455f, 3.2258f, 2.1739f};
@@ -125,7 +104,7 @@ CaseResult run_case(const Case& cs, const gl::MsTable<3>& table, bool full, int 
     const float Le = 4.0f;
     const gl::PinholeCamera<float> camera(gl::Vec3f(0.0f, 0.3f, 4.2f), gl::Vec3f(0.0f), gl::Vec3f(0, 1, 0), 32.0f, W, H);
     CaseResult res;
-    res.spp = vpt_spp;
+    res.spp = prm.vpt_spp;
 
     // --- Point-based: light samples (volume + bounce surface samples), render. ---
     gl::PointBasedOptions<float> po;
@@ -135,16 +114,16 @@ CaseResult run_case(const Case& cs, const gl::MsTable<3>& table, bool full, int 
     po.camera_bounces = thick ? 0 : (full ? 2 : 1);
     po.light_bounces = thick ? 0 : 2;
     po.max_optical_depth = thick ? 8.0f : 10.0f;
-    po.cut.eps1 = g_eps1 > 0 ? float(g_eps1) : (full ? 0.2f : 1.0f);
+    po.cut.eps1 = float(prm.eps1);
     po.cut.eps2 = 0.2f * po.cut.eps1;
     po.two_step_depth = 3;
-    po.bounce_samples = g_bounce_samples > 0 ? g_bounce_samples : (full ? 4096 : 512);
+    po.bounce_samples = prm.bounce_samples;
     po.bounce_rays = full ? 8 : 4;
     po.bounce_k_max = full ? 6 : 3;
-    po.bounce_generations = bounce_generations;
+    po.bounce_generations = prm.bounce_generations;
     double c0 = cpu_seconds();
     gl::Rng lrng = gl::Rng::from_key(seed, 0x5742u);
-    const int n_surf = thick && !full ? 2 * n_surface : n_surface;
+    const int n_surf = thick && !full ? 2 * prm.n_surface : prm.n_surface;
     Renderer pb(medium, eta, sphere, gl::sphere_surface_samples(sphere, n_surf),
                 gl::Light<float, gl::RGB>::quad_light(quad, gl::RGB(Le)), po, lrng, &table,
                 gl::sphere_surface_samples(sphere, po.bounce_samples));
@@ -152,38 +131,40 @@ CaseResult run_case(const Case& cs, const gl::MsTable<3>& table, bool full, int 
     res.volume_samples = pb.volume_sample_count();
     res.bounce_ratio = pb.bounce_ratio()[1];
 
-    std::vector<gl::Image> pbi(kComp, gl::Image(W, H));
+    wang18::PbRun pr;
+    pr.img.assign(kComp, gl::Image(W, H));
     gl::Image pb_eq7(W, H);
+    // One block per image row; every pixel has its own key, so any thread count gives the same image.
     auto render_pb = [&](bool eq7_only) {
-        gl_examples::ProgressBar bar("wang18 " + cs.name + (eq7_only ? " point-based (boundary image)" : " point-based"),
-                                     std::uint64_t(H));
-#if defined(_OPENMP)
-#pragma omp parallel for schedule(dynamic, 1)
-#endif
-        for (int y = 0; y < H; ++y) {
-            for (int x = 0; x < W; ++x) {
-                gl::Rng rng = gl::Rng::from_key(seed, std::uint64_t(y) * W + x, 0x10000u);
-                const gl::Vec2f u = rng.uniform2<float>();
-                const auto c = pb.radiance_components(camera.generate_ray(float(x) + u.x, float(y) + u.y), rng);
-                for (int ch = 0; ch < 3; ++ch) {
-                    if (eq7_only) {
-                        pb_eq7.at(x, y, ch) = c.multiple[ch];
-                        continue;
+        (void)ex.parallel<int>(
+            "wang18 " + cs.name + (eq7_only ? " point-based (boundary image)" : " point-based"), std::uint64_t(H), 1,
+            [&](std::uint64_t, std::uint64_t y0, std::uint64_t y1) {
+                for (int y = int(y0); y < int(y1); ++y)
+                    for (int x = 0; x < W; ++x) {
+                        gl::Rng rng = gl::Rng::from_key(seed, std::uint64_t(y) * W + x, 0x10000u);
+                        const gl::Vec2f u = rng.uniform2<float>();
+                        const auto c = pb.radiance_components(camera.generate_ray(float(x) + u.x, float(y) + u.y), rng);
+                        for (int ch = 0; ch < 3; ++ch) {
+                            if (eq7_only) {
+                                pb_eq7.at(x, y, ch) = c.multiple[ch];
+                                continue;
+                            }
+                            pr.img[0].at(x, y, ch) = c.single[ch];
+                            pr.img[1].at(x, y, ch) = c.double_[ch];
+                            pr.img[2].at(x, y, ch) = c.multiple[ch];
+                            pr.img[3].at(x, y, ch) = c.bounced[ch];
+                            pr.img[4].at(x, y, ch) = c.total()[ch];
+                        }
                     }
-                    pbi[0].at(x, y, ch) = c.single[ch];
-                    pbi[1].at(x, y, ch) = c.double_[ch];
-                    pbi[2].at(x, y, ch) = c.multiple[ch];
-                    pbi[3].at(x, y, ch) = c.bounced[ch];
-                    pbi[4].at(x, y, ch) = c.total()[ch];
-                }
-            }
-            bar.advance(1);
-        }
-        bar.done();
+                return 0;
+            },
+            [](int&, int) {});
     };
     c0 = cpu_seconds();
     render_pb(false);
     res.cpu_pb = cpu_seconds() - c0;
+    pr.cpu_samples = res.cpu_samples;
+    pr.cpu_render = res.cpu_pb;
     if (study) {
         pb.set_ms_boundary_image(true);
         render_pb(true);
@@ -200,270 +181,231 @@ CaseResult run_case(const Case& cs, const gl::MsTable<3>& table, bool full, int 
         scenes.push_back(std::move(s));
     }
     const std::size_t npx = std::size_t(W) * std::size_t(H);
-    // batch sums [comp][batch][pixel * 3 + ch]
-    std::vector<double> bs(std::size_t(kComp) * kBatches * npx * 3, 0.0);
-    auto bidx = [&](int k, int b, std::size_t p, int ch) {
-        return ((std::size_t(k) * kBatches + std::size_t(b)) * npx + p) * 3 + std::size_t(ch);
-    };
+    wang18::VptRun v;  // batch sums v.bs[v.idx(comp, batch, pixel, ch)]
+    v.spp = prm.vpt_spp;
+    v.W = W;
+    v.H = H;
+    v.bs.assign(std::size_t(kComp) * kBatches * npx * 3, 0.0);
     gl::WalkOptions<float> wo;  // no max_depth cap; Russian roulette after 5 events
-    gl_examples::ProgressBar bar2("wang18 " + cs.name + " VPT reference", std::uint64_t(H));
     c0 = cpu_seconds();
-#if defined(_OPENMP)
-#pragma omp parallel for schedule(dynamic, 1)
-#endif
-    for (int y = 0; y < H; ++y) {
-        for (int x = 0; x < W; ++x) {
-            const std::size_t p = std::size_t(y) * W + x;
-            for (int ch = 0; ch < 3; ++ch) {
-                for (int s = 0; s < vpt_spp; ++s) {
-                    gl::Rng rng = gl::Rng::from_key(seed, p, std::uint64_t(s) * 3 + std::uint64_t(ch));
-                    const gl::Vec2f u = rng.uniform2<float>();
-                    SplitVpt cb{scenes[std::size_t(ch)]};
-                    auto st = gl::start_path<float, Grey>(camera.generate_ray(float(x) + u.x, float(y) + u.y), -1);
-                    (void)gl::walk(scenes[std::size_t(ch)], st, rng, cb, wo);
-                    const int b = s % kBatches;
-                    double tot = 0;
-                    for (int k = 0; k < 4; ++k) {
-                        bs[bidx(k, b, p, ch)] += cb.L[std::size_t(k)];
-                        tot += cb.L[std::size_t(k)];
-                    }
-                    bs[bidx(4, b, p, ch)] += tot;
+    (void)ex.parallel<int>(
+        "wang18 " + cs.name + " VPT reference", std::uint64_t(H), 1,
+        [&](std::uint64_t, std::uint64_t y0, std::uint64_t y1) {
+            for (int y = int(y0); y < int(y1); ++y)
+                for (int x = 0; x < W; ++x) {
+                    const std::size_t p = std::size_t(y) * W + x;
+                    for (int ch = 0; ch < 3; ++ch)
+                        for (int s = 0; s < v.spp; ++s) {
+                            gl::Rng rng = gl::Rng::from_key(seed, p, std::uint64_t(s) * 3 + std::uint64_t(ch));
+                            const gl::Vec2f u = rng.uniform2<float>();
+                            SplitVpt cb{scenes[std::size_t(ch)]};
+                            auto st = gl::start_path<float, Grey>(camera.generate_ray(float(x) + u.x, float(y) + u.y), -1);
+                            (void)gl::walk(scenes[std::size_t(ch)], st, rng, cb, wo);
+                            const int b = s % kBatches;
+                            double tot = 0;
+                            for (int k = 0; k < 4; ++k) {
+                                v.bs[v.idx(k, b, p, ch)] += cb.L[std::size_t(k)];
+                                tot += cb.L[std::size_t(k)];
+                            }
+                            v.bs[v.idx(4, b, p, ch)] += tot;
+                        }
                 }
-            }
-        }
-        bar2.advance(1);
-    }
-    bar2.done();
+            return 0;
+        },
+        [](int&, int) {});
     res.cpu_vpt = cpu_seconds() - c0;
-    const double per_batch = double(vpt_spp) / kBatches;
+    v.cpu = res.cpu_vpt;
 
-    // Component means with standard errors from the batch image means.
+    // Reference mean images per component.
     std::vector<gl::Image> refi(kComp, gl::Image(W, H));
-    for (int k = 0; k < kComp; ++k) {
-        double bm[kBatches]{};
-        for (int b = 0; b < kBatches; ++b) {
-            double s = 0;
-            for (std::size_t i = 0; i < npx * 3; ++i) s += bs[bidx(k, b, 0, 0) + i];
-            bm[b] = s / (per_batch * double(npx * 3));
-        }
-        double m = 0, v = 0;
-        for (double x : bm) m += x / kBatches;
-        for (double x : bm) v += (x - m) * (x - m) / (kBatches - 1);
+    for (int k = 0; k < kComp; ++k)
         for (std::size_t p = 0; p < npx; ++p)
             for (int ch = 0; ch < 3; ++ch) {
                 double s = 0;
-                for (int b = 0; b < kBatches; ++b) s += bs[bidx(k, b, p, ch)];
-                refi[std::size_t(k)].at(int(p % W), int(p / W), ch) = float(s / double(vpt_spp));
+                for (int b = 0; b < kBatches; ++b) s += v.bs[v.idx(k, b, p, ch)];
+                refi[std::size_t(k)].at(int(p % W), int(p / W), ch) = float(s / double(v.spp));
             }
-        res.ref[k] = m;
-        res.ref_se[k] = std::sqrt(v / kBatches);
-        res.pb[k] = image_mean(pbi[std::size_t(k)]);
-        res.rel[k] = m > 0 ? (res.pb[k] - m) / m : 0.0;
-        res.rel_se[k] = m > 0 ? res.ref_se[k] / m : 0.0;
-    }
-    res.bounced_share = res.ref[4] > 0 ? res.ref[3] / res.ref[4] : 0.0;
+    // Means with standard errors from the batches, e^2 = MSE - reference variance of the mean,
+    // variance stability between batch halves, equal-error speed-up of the total (measuring.md).
+    res.cmp = wang18::compare(pr, v);
     if (study) {
         res.pb_multiple_image = image_mean(pb_eq7);
-        res.rel_multiple_image = res.ref[2] > 0 ? (res.pb_multiple_image - res.ref[2]) / res.ref[2] : 0.0;
+        res.rel_multiple_image =
+            res.cmp.ref[2] > 0 ? (res.pb_multiple_image - res.cmp.ref[2]) / res.cmp.ref[2] : 0.0;
     }
 
-    // Per-pixel variance of the total (per sample, from the batches), two halves for the check.
-    double mse = 0, var_mean = 0, var_ps[2] = {0, 0};
-    for (std::size_t p = 0; p < npx; ++p)
-        for (int ch = 0; ch < 3; ++ch) {
-            double bm[kBatches], m = 0;
-            for (int b = 0; b < kBatches; ++b) {
-                bm[b] = bs[bidx(4, b, p, ch)] / per_batch;
-                m += bm[b] / kBatches;
-            }
-            double v = 0, vh[2] = {0, 0}, mh[2] = {0, 0};
-            for (int b = 0; b < kBatches; ++b) v += (bm[b] - m) * (bm[b] - m) / (kBatches - 1);
-            for (int h = 0; h < 2; ++h) {
-                for (int b = h * kBatches / 2; b < (h + 1) * kBatches / 2; ++b) mh[h] += bm[b] / (kBatches / 2);
-                for (int b = h * kBatches / 2; b < (h + 1) * kBatches / 2; ++b)
-                    vh[h] += (bm[b] - mh[h]) * (bm[b] - mh[h]) / (kBatches / 2 - 1);
-                var_ps[h] += vh[h] * per_batch;
-            }
-            const double d = double(pbi[4].at(int(p % W), int(p / W), ch)) - m;
-            mse += d * d;
-            var_mean += v / kBatches;
-        }
-    const double n3 = double(npx * 3);
-    mse /= n3;
-    var_mean /= n3;
-    res.ref_var_mean = var_mean;
-    res.ref_var_per_sample = var_mean * double(vpt_spp);
-    res.var_half_ratio = var_ps[1] > 0 ? var_ps[0] / var_ps[1] : 0.0;
-    res.e2 = std::max(mse - var_mean, 1e-3 * mse);
-    // Reference time to error e^2: (per-sample variance / e^2) samples per pixel, at the measured
-    // CPU seconds per pixel sample (all three channel walks).
-    const double t_ref = res.ref_var_per_sample / res.e2 * (res.cpu_vpt / double(vpt_spp));
-    res.speedup = t_ref / (res.cpu_samples + res.cpu_pb);
-
-    auto save = [&](const gl::Image& img, const std::string& nm) {
-        gl::write_exr(out / (nm + ".exr"), img);
-        gl::write_png(out / (nm + ".png"), img, {thick ? 4.0 : 1.0});
-    };
     if (!study) {
-        save(pbi[4], "wang18_" + cs.name + "_point_based");
-        save(refi[4], "wang18_" + cs.name + "_vpt");
+        const auto& out = ex.out();
+        const double exposure = thick ? 4.0 : 1.0;
+        wang18::save_image(out, "wang18_" + cs.name + "_point_based", pr.img[4], exposure);
+        wang18::save_image(out, "wang18_" + cs.name + "_vpt", refi[4], exposure);
         for (int k = 0; k < 4; ++k) {
-            save(pbi[std::size_t(k)], "wang18_" + cs.name + "_pb_" + kCompName[k]);
-            save(refi[std::size_t(k)], "wang18_" + cs.name + "_vpt_" + kCompName[k]);
+            wang18::save_image(out, "wang18_" + cs.name + "_pb_" + kCompName[k], pr.img[std::size_t(k)], exposure);
+            wang18::save_image(out, "wang18_" + cs.name + "_vpt_" + kCompName[k], refi[std::size_t(k)], exposure);
         }
     }
     return res;
 }
 
 void print_case(const Case& cs, const CaseResult& r) {
+    const auto& c = r.cmp;
     std::printf("Wang18 point-based vs VPT, %s sphere (radius %.1f green mean free paths), BmpS. material, eta 1.33\n",
                 cs.name.c_str(), double(cs.R_opt));
     std::printf("  %-9s %12s %12s %10s %9s\n", "component", "point-based", "VPT", "VPT s.e.", "rel.diff");
     for (int k = 0; k < kComp; ++k)
-        std::printf("  %-9s %12.5f %12.5f %10.2e %+8.1f%% (+- %.1f%%)\n", kCompName[k], r.pb[k], r.ref[k], r.ref_se[k],
-                    100 * r.rel[k], 100 * r.rel_se[k]);
+        std::printf("  %-9s %12.5f %12.5f %10.2e %+8.1f%% (+- %.1f%%)\n", kCompName[k], c.pb[k], c.ref[k], c.ref_se[k],
+                    100 * c.rel[k], 100 * c.rel_se[k]);
     std::printf("  bounced light (reflection between events): %.1f%% of all scattered light; twice/once reflected "
                 "(point-based, green): %.3f\n",
-                100 * r.bounced_share, r.bounce_ratio);
+                100 * c.bounced_share, r.bounce_ratio);
     std::printf("  CPU: light samples %.2f s (%zu volume samples), point-based render %.2f s, VPT %.2f s (%d spp x 3 "
                 "channels)\n",
                 r.cpu_samples, r.volume_samples, r.cpu_pb, r.cpu_vpt, r.spp);
     std::printf("  equal error: point-based e^2 = %.3e (MSE minus the reference's variance %.3e), VPT variance per "
                 "sample %.3e (halves agree to %.2f) -> speed-up %.2fx   [paper Table 3: 11x-360x vs UPBP; BmpS. 360x]\n",
-                r.e2, r.ref_var_mean, r.ref_var_per_sample, r.var_half_ratio, r.speedup);
+                c.e2[4], c.ref_var_mean[4], c.ref_var_per_sample, c.var_half_ratio, c.speedup);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-    return gl_examples::run_main("wang18_point_based", [&]() -> int {
-        gl_examples::Cli cli(argc, argv, "wang18_point_based",
-                             "Wang18 point-based single + double + multiple + bounced scattering vs the VPT reference");
-        cli.common_options("out/wang18_point_based")
-            .option("vpt-spp", "VPT samples per pixel and channel, multiple of 8 (default: 512 quick, 4096 full)")
-            .option("surface-samples", "light surface samples on the sphere (default: 6000 quick, 20000 full; the thick case uses twice as many at quick)")
-            .option("eps1", "Alg. 1 solid-angle threshold eps1 in sr (default 1.0 quick, 0.2 full; eps2 = eps1 / 5)")
-            .option("bounce-samples", "bounce surface samples of Eq. 8, their own Fibonacci lattice (default 512 quick, 4096 full)")
-            .option("bounce-generations", "reflections carried by the bounced term: 1 (Eq. 8 as in the paper) or 2 (default)")
-            .option("bias-study", "flag: the multiple-scattering bias study (optical radius 2, 5, 20, 50), docs/wang18.md");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const auto out = cli.out_dir("out/wang18_point_based");
-        const int threads = cli.threads();
-        const int vpt_spp = int(cli.integer("vpt-spp", full ? 4096 : 512));
-        const int n_surface = int(cli.integer("surface-samples", full ? 20000 : 6000));
-        if (vpt_spp < 16 || vpt_spp % kBatches != 0 || n_surface < 16)
-            throw gl_examples::cli_error("--vpt-spp >= 16 and a multiple of 8, --surface-samples >= 16");
-        const std::uint64_t seed = cli.seed();
-#if defined(_OPENMP)
-        if (threads > 0) omp_set_num_threads(threads);
-#endif
-        const bool study = cli.has("bias-study");
-        g_eps1 = cli.num("eps1", 0.0);
-        if (g_eps1 < 0 || g_eps1 > 10) throw gl_examples::cli_error("--eps1 must be in (0, 10]");
-        const int bounce_generations = int(cli.integer("bounce-generations", 2));
-        g_bounce_samples = int(cli.integer("bounce-samples", 0));
-        if (g_bounce_samples > 1000000) throw gl_examples::cli_error("--bounce-samples must be <= 1000000");
-        if (bounce_generations < 1 || bounce_generations > 2) throw gl_examples::cli_error("--bounce-generations must be 1 or 2");
+    return gl_examples::run(
+        argc, argv, "wang18_point_based",
+        "Wang18 point-based single + double + multiple + bounced scattering vs the VPT reference",
+        "out/wang18_point_based", [&](gl_examples::Example& ex) -> int {
+            Params prm;
+            prm.vpt_spp = ex.opt<int>("vpt-spp", 512, 4096, "VPT samples per pixel and channel, multiple of 8");
+            prm.n_surface = ex.opt<int>("surface-samples", 6000, 20000,
+                                        "light surface samples on the sphere (the thick case uses twice as many at quick)");
+            prm.eps1 = ex.opt<double>("eps1", 1.0, 0.2, "Alg. 1 solid-angle threshold eps1 in sr, in (0, 10]; eps2 = eps1 / 5");
+            prm.bounce_samples = ex.opt<int>("bounce-samples", 512, 4096,
+                                             "bounce surface samples of Eq. 8, their own Fibonacci lattice (<= 1000000)");
+            prm.bounce_generations =
+                ex.opt<int>("bounce-generations", 2, "reflections carried by the bounced term: 1 (Eq. 8 as in the paper) or 2");
+            const bool study = ex.opt<bool>(
+                "bias-study", false, "flag: the multiple-scattering bias study (optical radius 2, 5, 20, 50), docs/wang18.md");
+            ex.ready();
+            prm.full = ex.full();
+            prm.seed = ex.seed();
+            const bool full = prm.full;
+            const auto& out = ex.out();
+            if (prm.vpt_spp < 16 || prm.vpt_spp % kBatches != 0)
+                throw gl_examples::cli_error("--vpt-spp = " + std::to_string(prm.vpt_spp) +
+                                             " must be >= 16 and a multiple of 8");
+            if (prm.n_surface < 16)
+                throw gl_examples::cli_error("--surface-samples = " + std::to_string(prm.n_surface) + " must be >= 16");
+            if (!(prm.eps1 > 0) || prm.eps1 > 10)
+                throw gl_examples::cli_error("--eps1 = " + std::to_string(prm.eps1) + " must be in (0, 10]");
+            if (prm.bounce_samples < 1 || prm.bounce_samples > 1000000)
+                throw gl_examples::cli_error("--bounce-samples = " + std::to_string(prm.bounce_samples) +
+                                             " must be in [1, 1000000]");
+            if (prm.bounce_generations < 1 || prm.bounce_generations > 2)
+                throw gl_examples::cli_error("--bounce-generations = " + std::to_string(prm.bounce_generations) +
+                                             " must be 1 or 2");
 
-        // One table for both cases (it is in units of the mean free path): built once, cached on
-        // disk keyed by its parameters.
-        const float g = 0.7f;
-        const gl::RGB albedo{0.9545f, 0.6774f, 0.4565f};
-        gl::MsTableOptions to;
-        to.n_rho = full ? 96 : 48;
-        to.n_z = full ? 192 : 96;
-        to.n_theta = full ? 18 : 12;
-        to.n_phi = full ? 9 : 6;
-        to.rho_max = 10;
-        to.z_min = -10;
-        to.z_max = 10;
-        to.photons = full ? 2000000 : 200000;
-        to.seed = seed;
-        const auto table_path = out / ("wang18_ms_table_g0.7_bmps_" + std::to_string(to.n_rho) + "x" +
-                                       std::to_string(to.n_z) + "x" + std::to_string(to.n_theta) + "x" +
-                                       std::to_string(to.n_phi) + "_" + std::to_string(to.photons) + "_s" +
-                                       std::to_string(seed) + ".bin");
-        double c0 = cpu_seconds();
-        gl::MsTable<3> table;
-        bool cached = false;
-        if (std::filesystem::exists(table_path)) {
-            try {
-                table = gl::MsTable<3>::load(table_path);
-                cached = true;
-            } catch (const std::exception&) {
-                cached = false;
+            // One table for both cases (it is in units of the mean free path): built once, cached
+            // on disk keyed by its parameters.
+            const float g = 0.7f;
+            const gl::RGB albedo{0.9545f, 0.6774f, 0.4565f};
+            gl::MsTableOptions to;
+            to.n_rho = full ? 96 : 48;
+            to.n_z = full ? 192 : 96;
+            to.n_theta = full ? 18 : 12;
+            to.n_phi = full ? 9 : 6;
+            to.rho_max = 10;
+            to.z_min = -10;
+            to.z_max = 10;
+            to.photons = full ? 2000000 : 200000;
+            to.seed = prm.seed;
+            const auto table_path = out / ("wang18_ms_table_g0.7_bmps_" + std::to_string(to.n_rho) + "x" +
+                                           std::to_string(to.n_z) + "x" + std::to_string(to.n_theta) + "x" +
+                                           std::to_string(to.n_phi) + "_" + std::to_string(to.photons) + "_s" +
+                                           std::to_string(prm.seed) + ".bin");
+            const double c0 = cpu_seconds();
+            gl::MsTable<3> table;
+            bool cached = false;
+            if (std::filesystem::exists(table_path)) {
+                try {
+                    table = gl::MsTable<3>::load(table_path);
+                    cached = true;
+                } catch (const std::exception&) {
+                    cached = false;
+                }
             }
-        }
-        if (!cached) {
-            table = gl::MsTable<3>::build(Phase(g), albedo, to);
-            table.save(table_path);
-        }
-        const double cpu_table = cpu_seconds() - c0;
-
-        if (study) {
-            const float radii[4] = {2, 5, 20, 50};
-            std::printf("Multiple-scattering bias study (BmpS., g = 0.7, eta 1.33; multiple = >= 3 events, no boundary "
-                        "reflection between events)\n");
-            std::printf("  %8s %12s %12s %14s %16s %12s %10s\n", "R/l_g", "VPT mult.", "s.e.", "Eq. 7 (paper)",
-                        "Eq. 7 + image", "total", "bounced");
-            gl_examples::Json j;
-            j.str("example", "wang18_point_based_bias_study");
-            for (float R : radii) {
-                const Case cs{"R" + std::to_string(int(R)), R};
-                const CaseResult r = run_case(cs, table, full, vpt_spp, n_surface, threads, seed, out, true, bounce_generations);
-                std::printf("  %8.0f %12.5f %11.1f%% %+13.1f%% %+15.1f%% %+11.1f%% %9.1f%%\n", double(R), r.ref[2],
-                            100 * r.rel_se[2], 100 * r.rel[2], 100 * r.rel_multiple_image, 100 * r.rel[4],
-                            100 * r.bounced_share);
-                const std::string p = "R" + std::to_string(int(R)) + "_";
-                j.num(p + "rel_diff_multiple_eq7", r.rel[2])
-                    .num(p + "rel_diff_multiple_image", r.rel_multiple_image)
-                    .num(p + "rel_se_multiple", r.rel_se[2])
-                    .num(p + "rel_diff_total", r.rel[4])
-                    .num(p + "bounced_share", r.bounced_share);
+            if (!cached) {
+                table = gl::MsTable<3>::build(Phase(g), albedo, to);
+                table.save(table_path);
             }
-            std::cout << j.str() << std::endl;
-            return 0;
-        }
+            const double cpu_table = cpu_seconds() - c0;
 
-        const Case thick{"thick", 20.0f}, small{"small", 10.0f / 3.2258f};
-        const CaseResult rt = run_case(thick, table, full, vpt_spp, n_surface, threads, seed, out, false, bounce_generations);
-        const CaseResult rs = run_case(small, table, full, vpt_spp, n_surface, threads, seed, out, false, bounce_generations);
-        std::printf("MS table %ux%ux%ux%u from %llu particles: %.2f s CPU%s, %.1f MB\n", table.grid().n_rho,
-                    table.grid().n_z, table.grid().n_theta, table.grid().n_phi, (unsigned long long)table.photons(),
-                    cpu_table, cached ? " (loaded from the cache)" : "", double(table.bytes()) / 1e6);
-        print_case(thick, rt);
-        print_case(small, rs);
-
-        gl_examples::Csv csv({"case", "component", "pb_mean", "vpt_mean", "vpt_se", "rel_diff"});
-        for (const auto& [cs, r] : {std::pair<const Case&, const CaseResult&>{thick, rt}, {small, rs}})
-            for (int k = 0; k < kComp; ++k)
-                csv.row_text({cs.name, kCompName[k], std::to_string(r.pb[k]), std::to_string(r.ref[k]),
-                              std::to_string(r.ref_se[k]), std::to_string(r.rel[k])});
-        csv.write(out / "wang18_point_based.csv");
-
-        gl_examples::Json j;
-        j.str("example", "wang18_point_based").integer("vpt_spp", vpt_spp).integer("surface_samples", n_surface);
-        j.num("seconds_table", cpu_table);
-        auto put = [&](const std::string& p, const CaseResult& r) {
-            j.integer(p + "volume_samples", (long long)r.volume_samples)
-                .num(p + "seconds_samples", r.cpu_samples)
-                .num(p + "seconds_pb", r.cpu_pb)
-                .num(p + "seconds_vpt", r.cpu_vpt);
-            for (int k = 0; k < kComp; ++k) {
-                j.num(p + "rel_diff_" + kCompName[k], r.rel[k]);
-                j.num(p + "rel_se_" + kCompName[k], r.rel_se[k]);
+            if (study) {
+                const float radii[4] = {2, 5, 20, 50};
+                std::printf("Multiple-scattering bias study (BmpS., g = 0.7, eta 1.33; multiple = >= 3 events, no "
+                            "boundary reflection between events)\n");
+                std::printf("  %8s %12s %12s %14s %16s %12s %10s\n", "R/l_g", "VPT mult.", "s.e.", "Eq. 7 (paper)",
+                            "Eq. 7 + image", "total", "bounced");
+                gl_examples::Json j = ex.summary();
+                j.str("study", "bias");
+                gl_examples::Csv csv({"radius_mfp", "vpt_multiple", "rel_se_multiple", "rel_diff_multiple_eq7",
+                                      "rel_diff_multiple_image", "rel_diff_total", "bounced_share"});
+                for (float R : radii) {
+                    const Case cs{"R" + std::to_string(int(R)), R};
+                    const CaseResult r = run_case(ex, cs, table, prm, true);
+                    const auto& c = r.cmp;
+                    std::printf("  %8.0f %12.5f %11.1f%% %+13.1f%% %+15.1f%% %+11.1f%% %9.1f%%\n", double(R), c.ref[2],
+                                100 * c.rel_se[2], 100 * c.rel[2], 100 * r.rel_multiple_image, 100 * c.rel[4],
+                                100 * c.bounced_share);
+                    const std::string p = "R" + std::to_string(int(R)) + "_";
+                    j.num(p + "rel_diff_multiple_eq7", c.rel[2])
+                        .num(p + "rel_diff_multiple_image", r.rel_multiple_image)
+                        .num(p + "rel_se_multiple", c.rel_se[2])
+                        .num(p + "rel_diff_total", c.rel[4])
+                        .num(p + "bounced_share", c.bounced_share);
+                    csv.row({double(R), c.ref[2], c.rel_se[2], c.rel[2], r.rel_multiple_image, c.rel[4], c.bounced_share});
+                }
+                (void)ex.csv("wang18_point_based_bias_study.csv", csv);
+                return ex.finish(j);
             }
-            j.num(p + "bounced_share", r.bounced_share)
-                .num(p + "pb_error2", r.e2)
-                .num(p + "vpt_variance_per_sample", r.ref_var_per_sample)
-                .num(p + "vpt_variance_half_ratio", r.var_half_ratio)
-                .num(p + "speedup_equal_error", r.speedup);
-        };
-        put("", rt);
-        put("small_", rs);
-        j.num("paper_speedup_bmps", 360.0).str("png", (out / "wang18_thick_point_based.png").string());
-        std::cout << j.str() << std::endl;
-        return 0;
-    });
+
+            const Case thick{"thick", 20.0f}, small{"small", 10.0f / 3.2258f};
+            const CaseResult rt = run_case(ex, thick, table, prm, false);
+            const CaseResult rs = run_case(ex, small, table, prm, false);
+            std::printf("MS table %ux%ux%ux%u from %llu particles: %.2f s CPU%s, %.1f MB\n", table.grid().n_rho,
+                        table.grid().n_z, table.grid().n_theta, table.grid().n_phi, (unsigned long long)table.photons(),
+                        cpu_table, cached ? " (loaded from the cache)" : "", double(table.bytes()) / 1e6);
+            print_case(thick, rt);
+            print_case(small, rs);
+
+            gl_examples::Csv csv({"case", "component", "pb_mean", "vpt_mean", "vpt_se", "rel_diff"});
+            for (const auto& [cs, r] : {std::pair<const Case&, const CaseResult&>{thick, rt}, {small, rs}})
+                for (int k = 0; k < kComp; ++k)
+                    csv.row_text({cs.name, kCompName[k], std::to_string(r.cmp.pb[k]), std::to_string(r.cmp.ref[k]),
+                                  std::to_string(r.cmp.ref_se[k]), std::to_string(r.cmp.rel[k])});
+            const auto csv_path = ex.csv("wang18_point_based.csv", csv);
+            (void)ex.plot("wang18_point_based", csv_path, out / "wang18_point_based_components.png");
+
+            gl_examples::Json j = ex.summary();
+            j.integer("vpt_spp", prm.vpt_spp).integer("surface_samples", prm.n_surface);
+            j.num("seconds_table", cpu_table);
+            auto put = [&](const std::string& p, const CaseResult& r) {
+                const auto& c = r.cmp;
+                j.integer(p + "volume_samples", (long long)r.volume_samples)
+                    .num(p + "seconds_samples", r.cpu_samples)
+                    .num(p + "seconds_pb", r.cpu_pb)
+                    .num(p + "seconds_vpt", r.cpu_vpt);
+                for (int k = 0; k < kComp; ++k) {
+                    j.num(p + "rel_diff_" + kCompName[k], c.rel[k]);
+                    j.num(p + "rel_se_" + kCompName[k], c.rel_se[k]);
+                }
+                j.num(p + "bounced_share", c.bounced_share)
+                    .num(p + "pb_error2", c.e2[4])
+                    .num(p + "vpt_variance_per_sample", c.ref_var_per_sample)
+                    .num(p + "vpt_variance_half_ratio", c.var_half_ratio)
+                    .num(p + "speedup_equal_error", c.speedup);
+            };
+            put("", rt);
+            put("small_", rs);
+            j.num("paper_speedup_bmps", 360.0).str("png", (out / "wang18_thick_point_based.png").string());
+            return ex.finish(j);
+        });
 }
