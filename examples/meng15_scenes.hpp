@@ -251,7 +251,7 @@ inline std::vector<std::unique_ptr<MeshPanel>> make_spice_panels(double Rh, doub
 inline std::vector<std::unique_ptr<MeshPanel>> make_sandcastle_panel(double S, int w, int h, std::uint64_t seed, bool full,
                                                                      int level) {
     const float Sf = float(S);
-    const gl::PinholeCamera<float> cam(gl::Vec3f(0.0f, 1.5f * Sf, 3.4f * Sf), gl::Vec3f(0.0f, 0.35f * Sf, 0.0f), gl::Vec3f(0, 1, 0),
+    const gl::PinholeCamera<float> cam(gl::Vec3f(0.0f, 1.25f * Sf, 2.7f * Sf), gl::Vec3f(0.0f, 0.38f * Sf, 0.0f), gl::Vec3f(0, 1, 0),
                                        36.0f, w, h);
     std::vector<std::unique_ptr<MeshPanel>> out;
     out.push_back(make_mesh_panel("sandcastle", make_grains(gl::grain_preset("sand"), seed, full, level),

@@ -93,3 +93,19 @@ if(TARGET meng15_fig12_spices OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT
   add_test(NAME meng15_fig12_spices_bad_radius COMMAND $<TARGET_FILE:meng15_fig12_spices> --radius 0)
   set_tests_properties(meng15_fig12_spices_bad_radius PROPERTIES WILL_FAIL TRUE LABELS "example;hybrid")
 endif()
+if(TARGET meng15_fig1_sandcastle OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/meng15_fig1_sandcastle.cpp))
+  # Fig. 1 at quick (castle 60 grain radii wide, 96 x 54 px; ~40 CPU s): every key finite; EPT+VPT+DA's
+  # mean within 15 % of EPT's; the high-order CPU time of EPT+VPT+DA below EPT's (VPT replaces the
+  # long EPT tails: the whole point of the switch, Fig. 1's 628 vs 50 h); at least one grain
+  # interaction before a switch makes the hybrid's total time > its high-order time; the
+  # equal-time EPT render got at least one bundle per pixel.
+  add_test(NAME meng15_fig1_sandcastle_quick
+           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:meng15_fig1_sandcastle>
+                   "-DARGS=--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_fig1_sandcastle"
+                   "-DCHECKS=abs(bias_ept_vpt_da) < 0.15;bias_ept_vpt_da_stderr > 0;ept_vpt_da_speedup > 0;ept_vpt_da_speedup_high_order > 1;high_cpu_seconds_ept_vpt_da < high_cpu_seconds_ept;total_cpu_seconds_ept_vpt_da > high_cpu_seconds_ept_vpt_da;pixel_variance_ept > 0;pixel_variance_ept_vpt_da > 0;grains > 1000;equal_time_ept_spp >= 1"
+                   -DEXPECT_FILE=${CMAKE_CURRENT_BINARY_DIR}/meng15_fig1_sandcastle/fig1_sandcastle.exr
+                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
+  set_tests_properties(meng15_fig1_sandcastle_quick PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
+  add_test(NAME meng15_fig1_sandcastle_bad_size COMMAND $<TARGET_FILE:meng15_fig1_sandcastle> --castle-size 1)
+  set_tests_properties(meng15_fig1_sandcastle_bad_size PROPERTIES WILL_FAIL TRUE LABELS "example;hybrid")
+endif()
