@@ -55,14 +55,9 @@ struct Grains {
     }
 };
 
-/// Grains of preset `p` (its material as given) in an MD packing at f = 0.6 (400 grains per tile
-/// at full, 200 at quick) and their scatterometer statistics (400k / 100k rays).
-inline Grains make_grains(const gl::GrainPreset& p, std::uint64_t seed, bool full, int level) {
-    const auto packed = gl::md_pack(full ? 400 : 200, 0.6, seed);
-    const double s = 1.0 / packed.tile.radius();
-    std::vector<gl::Vec3d> centers = packed.tile.centers();
-    for (auto& c : centers) c *= s;
-    gl::PeriodicTile tile(packed.tile.side() * s, 1.0, std::move(centers));
+/// Grains of preset `p` (its material as given) in the unit-grain-radius tile `tile` and their
+/// scatterometer statistics (400k / 100k rays at full / quick).
+inline Grains make_grains(gl::PeriodicTile tile, const gl::GrainPreset& p, std::uint64_t seed, bool full, int level) {
     gl::ScatterometerConfig cfg;
     cfg.rays = full ? 400000 : 100000;
     cfg.seed = seed;
@@ -70,6 +65,19 @@ inline Grains make_grains(const gl::GrainPreset& p, std::uint64_t seed, bool ful
     const gl::EffectiveRteParams rte = gl::effective_rte_params(stats, tile.packing_fraction(), 1.0);
     Medium medium = gl::make_effective_medium<float, gl::RGB>(stats, tile.packing_fraction(), 1.0);
     return Grains{std::move(tile), p, stats, rte, gl::make_hybrid_diffusion(rte), std::move(medium), level};
+}
+
+/// The tile `t` scaled to unit grain radius.
+inline gl::PeriodicTile unit_radius_tile(const gl::PeriodicTile& t) {
+    const double s = 1.0 / t.radius();
+    std::vector<gl::Vec3d> centers = t.centers();
+    for (auto& c : centers) c *= s;
+    return gl::PeriodicTile(t.side() * s, 1.0, std::move(centers));
+}
+
+/// Grains of preset `p` in an MD packing at f = 0.6 (400 grains per tile at full, 200 at quick).
+inline Grains make_grains(const gl::GrainPreset& p, std::uint64_t seed, bool full, int level) {
+    return make_grains(unit_radius_tile(gl::md_pack(full ? 400 : 200, 0.6, seed).tile), p, seed, full, level);
 }
 
 /// Snow grains (the snow preset's shape, ior 1.31) with a faint ice-like absorption per grain
