@@ -24,7 +24,6 @@
 
 #include "common/harness.hpp"
 #include "meng15_scenes.hpp"
-#include "grainlight/packing/poisson.hpp"
 
 namespace gl = grainlight;
 using namespace gl_examples;
@@ -51,39 +50,11 @@ int main(int argc, char** argv) {
         if (width < 8 || width > 4096) throw cli_error("--width must be in [8, 4096]");
         if (spp < 8 || spp > 4096) throw cli_error("--spp must be in [8, 4096] (measuring.md: >= 8 batches)");
         const int height = std::max(6, width * 3 / 4);
-        const double f = 0.3;
-        const double L = std::cbrt(beads * 4.0 / 3.0 * gl::pi_v<double> / f);
 
-        // Glass beads (the glass-bead preset: sphere, ior 1.5) in a periodic RSA tile at f = 0.3
-        // (Moon07's random process), unit bead radius; the effective medium from the scatterometer.
-        gl::Rng prng = gl::Rng::from_key(ex.seed(), 0xC0BEu);
-        const gl::PeriodicTile rsa = gl::random_sequential_addition(ex.full() ? 400 : 200, f, prng, 1.0);
-        const meng15::Grains g = meng15::make_grains(meng15::unit_radius_tile(rsa), gl::grain_preset("glass-bead"), ex.seed(), ex.full(), 1);
-        const gl::BoxBoundary shape(gl::Vec3d(-0.5 * L, 0.0, -0.5 * L), gl::Vec3d(0.5 * L, L, 0.5 * L));
-        const gl::GranularAggregate<gl::BoxBoundary> agg = g.aggregate(shape, ex.seed());
-        const float Lf = float(L), ls = 0.5f;
-        meng15::SceneT ept;
-        // Moon07 Fig. 9's light at 2.2 L, 0.05 L off the cube's axis, radiance 0.9 / side^2, but of
-        // side 0.5 L instead of 0.12 L, and a dim grey sky (0.1) instead of Moon07's black: EPT through
-        // specular beads reaches a light only by hitting it (no NEE through the glass), and with
-        // Moon07's small light EPT's image is a few fireflies at any affordable sample count. The
-        // blocker (black) at 1.5 L over x < -0.08 L as in Moon07.
-        ept.add_quad_light(gl::QuadShape<float>(gl::Vec3f((0.05f - ls / 2) * Lf, 2.2f * Lf, -ls / 2 * Lf), gl::Vec3f(ls * Lf, 0, 0),
-                                                gl::Vec3f(0, 0, ls * Lf)),
-                           gl::RGB(0.9f / (ls * ls)));
-        ept.add_shape(gl::QuadShape<float>(gl::Vec3f(-2.5f * Lf, 1.5f * Lf, -3.0f * Lf), gl::Vec3f(0, 0, 6.0f * Lf),
-                                           gl::Vec3f(2.42f * Lf, 0, 0)),
-                      gl::Material<float, gl::RGB>::diffuse(gl::RGB(0.0f)));
-        ept.add_light(meng15::SceneT::LightT::environment_light(gl::RGB(0.1f)));
-        meng15::SceneT vpt = ept;
-        const int m = vpt.add_medium(g.medium);
-        const int b = vpt.add_shape(gl::BoxShape<float>(gl::Vec3f(-0.5f * Lf, 0.0f, -0.5f * Lf), gl::Vec3f(0.5f * Lf, Lf, 0.5f * Lf)),
-                                    gl::Material<float, gl::RGB>::index_matched(), m, -1);
-        const gl::HybridContext<gl::BoundaryDistance<gl::BoxBoundary>> ctx{m, b, {shape}, &g.diffusion};
-        const gl::PinholeCamera<float> cam(gl::Vec3f(-1.1f * Lf, 1.25f * Lf, 2.2f * Lf), gl::Vec3f(0.0f, 0.45f * Lf, 0.0f),
-                                           gl::Vec3f(0, 1, 0), 36.0f, width, height);
-        const std::vector<meng15::Panel<gl::BoxBoundary, gl::BoundaryDistance<gl::BoxBoundary>, gl::PinholeCamera<float>>> panels{
-            {"cube", &agg, &ept, &vpt, &ctx, &cam}};
+        const auto cube = meng15::make_glass_bead_cube(beads, width, height, ex.seed(), ex.full());
+        const meng15::Grains& g = cube->grains;
+        const double L = cube->L;
+        const auto panels = cube->panels();
         std::printf("Meng15 Fig. 7 / Moon07 Fig. 9: cube of %.0f glass beads (ior 1.5, RSA f = %.2f), side %.1f bead radii; albedo %.4f, "
                     "sigma_t %.3f /R, g %.3f, d_DA %.2f R; %dx%d px, %d bundles x 16 paths per pixel\n",
                     beads, g.tile.packing_fraction(), L, g.stats.alpha_s(1), g.rte.sigma_t[1], g.rte.g[1], g.diffusion.d_DA, width, height,

@@ -23,6 +23,7 @@
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/media/teleportation.hpp"
 #include "grainlight/packing/md_packer.hpp"
+#include "grainlight/packing/poisson.hpp"
 #include "grainlight/phase/tabulated.hpp"
 #include "grainlight/precompute/scatterometer.hpp"
 #include "grainlight/scene/camera.hpp"
@@ -273,6 +274,58 @@ inline std::vector<Panel<gl::MeshBoundary, gl::MeshDistance, gl::PinholeCamera<f
     std::vector<Panel<gl::MeshBoundary, gl::MeshDistance, gl::PinholeCamera<float>>> p;
     for (const auto& h : mp) p.push_back({h->name, &h->agg, &h->ept, &h->vpt, &h->ctx, &h->camera});
     return p;
+}
+
+/// Meng15 Fig. 7's glass-bead cube (Moon07 Fig. 9): lossless glass spheres (the glass-bead
+/// preset, ior 1.5) by random sequential addition at f = 0.3 (a periodic tile of 200 / 400 beads at
+/// quick / full), the cube's side from the bead count as in moon07_fig9_cube_shadow (L = cbrt(n
+/// 4/3 pi / f) bead radii), standing on y = 0; Moon07's light at 2.2 L (0.05 L off axis, radiance
+/// 0.9 / side^2) but of side 0.5 L instead of 0.12 L, and a dim grey sky (0.1) instead of black:
+/// EPT through specular beads reaches a light only by hitting it (no NEE through the glass), and
+/// with Moon07's small light EPT's image is a few fireflies at any affordable sample count. The
+/// black blocker at 1.5 L over x < -0.08 L as in Moon07. Owned objects (kept behind a unique_ptr).
+struct GlassBeadCube {
+    double L = 0;  ///< cube side in bead radii
+    Grains grains;
+    gl::BoxBoundary shape;
+    gl::GranularAggregate<gl::BoxBoundary> agg;
+    SceneT ept, vpt;
+    gl::HybridContext<gl::BoundaryDistance<gl::BoxBoundary>> ctx;
+    gl::PinholeCamera<float> camera;
+    /// The one panel.
+    [[nodiscard]] std::vector<Panel<gl::BoxBoundary, gl::BoundaryDistance<gl::BoxBoundary>, gl::PinholeCamera<float>>> panels() const {
+        return {{"glass_bead_cube", &agg, &ept, &vpt, &ctx, &camera}};
+    }
+};
+
+/// The cube of `beads` glass beads seen by a w x h camera from the front left and above.
+inline std::unique_ptr<GlassBeadCube> make_glass_bead_cube(double beads, int w, int h, std::uint64_t seed, bool full) {
+    const double f = 0.3;
+    const double L = std::cbrt(beads * 4.0 / 3.0 * gl::pi_v<double> / f);
+    gl::Rng prng = gl::Rng::from_key(seed, 0xC0BEu);
+    const gl::PeriodicTile rsa = gl::random_sequential_addition(full ? 400 : 200, f, prng, 1.0);
+    Grains g = make_grains(unit_radius_tile(rsa), gl::grain_preset("glass-bead"), seed, full, 1);
+    const gl::BoxBoundary shape(gl::Vec3d(-0.5 * L, 0.0, -0.5 * L), gl::Vec3d(0.5 * L, L, 0.5 * L));
+    gl::GranularAggregate<gl::BoxBoundary> agg = g.aggregate(shape, seed);
+    const float Lf = float(L), ls = 0.5f;
+    SceneT ept;
+    ept.add_quad_light(gl::QuadShape<float>(gl::Vec3f((0.05f - ls / 2) * Lf, 2.2f * Lf, -ls / 2 * Lf), gl::Vec3f(ls * Lf, 0, 0),
+                                            gl::Vec3f(0, 0, ls * Lf)),
+                       gl::RGB(0.9f / (ls * ls)));
+    ept.add_shape(gl::QuadShape<float>(gl::Vec3f(-2.5f * Lf, 1.5f * Lf, -3.0f * Lf), gl::Vec3f(0, 0, 6.0f * Lf), gl::Vec3f(2.42f * Lf, 0, 0)),
+                  gl::Material<float, gl::RGB>::diffuse(gl::RGB(0.0f)));
+    ept.add_light(SceneT::LightT::environment_light(gl::RGB(0.1f)));
+    SceneT vpt = ept;
+    const int m = vpt.add_medium(g.medium);
+    const int b = vpt.add_shape(gl::BoxShape<float>(gl::Vec3f(-0.5f * Lf, 0.0f, -0.5f * Lf), gl::Vec3f(0.5f * Lf, Lf, 0.5f * Lf)),
+                                gl::Material<float, gl::RGB>::index_matched(), m, -1);
+    const gl::PinholeCamera<float> cam(gl::Vec3f(-1.1f * Lf, 1.25f * Lf, 2.2f * Lf), gl::Vec3f(0.0f, 0.45f * Lf, 0.0f), gl::Vec3f(0, 1, 0),
+                                       36.0f, w, h);
+    auto c = std::unique_ptr<GlassBeadCube>(new GlassBeadCube{L, std::move(g), shape, std::move(agg), std::move(ept), std::move(vpt),
+                                                              gl::HybridContext<gl::BoundaryDistance<gl::BoxBoundary>>{m, b, {shape}, nullptr},
+                                                              cam});
+    c->ctx.diffusion = &c->grains.diffusion;
+    return c;
 }
 
 }  // namespace gl_examples::meng15

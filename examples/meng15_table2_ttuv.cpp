@@ -12,6 +12,7 @@
 //                 --size / 2, one aggregate per panel, measured as one image of four panels (half width each);
 //   sandcastle    Fig. 1's castle (towers, walls, keep: a heightfield CSG union, make_sandcastle_mesh) of sand
 //                 grains, --castle-size grain radii wide (full: 5200, ~2e9 grains);
+//   glass_bead_cube  Fig. 7's cube of glass beads (Moon07 Fig. 9; meng15_fig7_glass_bead_cube), --beads beads;
 //   obj           any closed OBJ mesh (--obj FILE), centred, standing on the ground, --size tall.
 // Each scene is printed beside Table 2's row (SPICES, SANDCASTLE, SNOWMAN LG. / SM.; the sphere has no row: Table 2's
 // range over its four scenes). P_a opt uses AcceptanceEstimate::P_a_safe (docs/meng15_hybrid.md:
@@ -228,13 +229,14 @@ int main(int argc, char** argv) {
                "Meng15 Table 2: ttuv and speedups of EPT+VPT and EPT+VPT+DA over EPT on snow_sphere / snowman stand-ins",
                [&](Example& ex) {
         const std::string scenes_arg =
-            ex.opt<std::string>("scenes", "snow_sphere,snowman_1m,spices", "snow_sphere,snowman_1m,snowman_10cm,spices,sandcastle",
-                                "scenes to render (snow_sphere, snowman_1m, snowman_10cm, spices, sandcastle, obj)");
+            ex.opt<std::string>("scenes", "snow_sphere,snowman_1m,spices", "snow_sphere,snowman_1m,snowman_10cm,spices,sandcastle,glass_bead_cube",
+                                "scenes to render (snow_sphere, snowman_1m, snowman_10cm, spices, sandcastle, glass_bead_cube, obj)");
         const int spp = ex.opt<int>("spp", 8, 8, "bundles of 16 paths per pixel (>= 8: the variance batches)");
         const int width = ex.opt<int>("width", 64, 96, "image width (height = 3/4 width)");
         const double size = ex.opt<double>("size", 60.0, 400.0, "snowman height / 2.5 x sphere radius, in grain radii");
         const double castle = ex.opt<double>("castle-size", 60.0, 5200.0,
                                              "sandcastle width in grain radii (5200: ~2e9 sand grains, Fig. 1's scale)");
+        const double beads = ex.opt<double>("beads", 15000.0, 120000.0, "glass beads in glass_bead_cube (Moon07 Fig. 9)");
         const double absorption = ex.opt<double>("absorption", 1e-3, 3e-4, "grain interior absorption per grain radius (green)");
         const int stride = ex.opt<int>("preview-stride", 4, 4, "P_a preview: every k-th pixel in x and y");
         const int level = ex.opt<int>("grain-level", 3, 4, "icosphere level of the snow grain mesh");
@@ -245,6 +247,7 @@ int main(int argc, char** argv) {
         if (width < 8 || width > 2048) throw cli_error("--width must be in [8, 2048]");
         if (!(size >= 10 && size <= 5000)) throw cli_error("--size must be in [10, 5000] grain radii");
         if (!(castle >= 10 && castle <= 1e5)) throw cli_error("--castle-size must be in [10, 1e5] grain radii");
+        if (!(beads >= 100 && beads <= 1e9)) throw cli_error("--beads must be in [100, 1e9]");
         if (!(absorption >= 0 && absorption <= 0.1)) throw cli_error("--absorption must be in [0, 0.1]");
         if (stride < 1 || stride > 50) throw cli_error("--preview-stride must be in [1, 50]");
         if (level < 1 || level > 5) throw cli_error("--grain-level must be in [1, 5]");
@@ -255,9 +258,9 @@ int main(int argc, char** argv) {
             while (std::getline(ss, s, ','))
                 if (!s.empty()) {
                     if (s != "snow_sphere" && s != "snowman_1m" && s != "snowman_10cm" && s != "spices" && s != "sandcastle" &&
-                        s != "obj")
+                        s != "glass_bead_cube" && s != "obj")
                         throw cli_error("--scenes: '" + s +
-                                        "' is not one of snow_sphere, snowman_1m, snowman_10cm, spices, sandcastle, obj");
+                                        "' is not one of snow_sphere, snowman_1m, snowman_10cm, spices, sandcastle, glass_bead_cube, obj");
                     if (s == "obj" && obj.empty()) throw cli_error("--scenes obj needs --obj FILE");
                     scenes.push_back(s);
                 }
@@ -302,6 +305,12 @@ int main(int argc, char** argv) {
                             castle, sc[0]->mesh.triangle_count(), sc[0]->grain_count, sc[0]->grains.stats.alpha_s(1),
                             sc[0]->grains.diffusion.d_DA);
                 r = run_scene(ex, key, meng15::panels_of(sc), rc, 1);
+            } else if (key == "glass_bead_cube") {
+                const auto cube = meng15::make_glass_bead_cube(beads, width, height, ex.seed(), ex.full());
+                std::printf("\nscene glass_bead_cube: Moon07 Fig. 9's cube of %.0f glass beads (RSA f = 0.3), side %.1f bead radii "
+                            "(albedo %.4f, d_DA = %.2f R)\n",
+                            beads, cube->L, cube->grains.stats.alpha_s(1), cube->grains.diffusion.d_DA);
+                r = run_scene(ex, key, cube->panels(), rc, -1);
             } else if (key == "snow_sphere") {
                 const double Rb = size / 2.5;
                 const gl::SphereBoundary shape(gl::Vec3d(0.0, Rb, 0.0), Rb);

@@ -43,6 +43,16 @@ if(TARGET meng15_table2_ttuv OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_
                    "-DCHECKS=ept_vpt_speedup > 0.5;ept_vpt_da_speedup > 0.5;ept_vpt_pa_opt_speedup > 0.5;abs(bias_ept_vpt) < 0.15;abs(bias_ept_vpt_da) < 0.3;bias_ept_vpt_stderr > 0"
                    -P ${PROJECT_SOURCE_DIR}/tests/hybrid/check_scenes_json.cmake)
   set_tests_properties(meng15_table2_ttuv_sandcastle PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
+  # Fig. 7's glass-bead cube (Moon07 Fig. 9) as a Table 2 scene, small (48 px, ~4 CPU s): the keys are
+  # finite; on lossless beads EPT+VPT beats EPT (measured 11x; bound 1).
+  add_test(NAME meng15_table2_ttuv_glass_bead_cube
+           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:meng15_table2_ttuv>
+                   "-DARGS=--scenes;glass_bead_cube;--width;48;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_table2_ttuv_cube"
+                   "-DSCENES=glass_bead_cube"
+                   "-DKEYS=ept_vpt_speedup;ept_vpt_speedup_high_order;ept_vpt_pa_opt_speedup;ept_vpt_da_speedup;ept_vpt_da_speedup_high_order;ept_vpt_da_pa_opt_speedup;bias_ept_vpt;bias_ept_vpt_stderr;bias_ept_vpt_da;bias_ept_vpt_da_stderr"
+                   "-DCHECKS=ept_vpt_speedup > 1;ept_vpt_da_speedup > 0;abs(bias_ept_vpt) < 0.1;abs(bias_ept_vpt_da) < 0.2;bias_ept_vpt_stderr > 0"
+                   -P ${PROJECT_SOURCE_DIR}/tests/hybrid/check_scenes_json.cmake)
+  set_tests_properties(meng15_table2_ttuv_glass_bead_cube PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
   add_test(NAME meng15_table2_ttuv_bad_scene COMMAND $<TARGET_FILE:meng15_table2_ttuv> --scenes castle)
   set_tests_properties(meng15_table2_ttuv_bad_scene PROPERTIES WILL_FAIL TRUE LABELS "example;hybrid")
 endif()
