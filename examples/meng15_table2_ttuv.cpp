@@ -8,14 +8,20 @@
 //                 asks the mesh's distance tree (MeshDistance::ball_inside);
 //   snowman_10cm  the same snowman with the grain radius x 10 (Fig. 13 bottom; full quality, or
 //                 --scenes);
+//   spices        Fig. 12's four heaps (flour as diffuse grains, pink salt, brown sugar, cane sugar), radius
+//                 --size / 2, one aggregate per panel, measured as one image of four panels (half width each);
+//   sandcastle    Fig. 1's castle (towers, walls, keep: a heightfield CSG union, make_sandcastle_mesh) of sand
+//                 grains, --castle-size grain radii wide (full: 5200, ~2e9 grains);
+//   glass_bead_cube  Fig. 7's cube of glass beads (Moon07 Fig. 9; meng15_fig7_glass_bead_cube), --beads beads;
 //   obj           any closed OBJ mesh (--obj FILE), centred, standing on the ground, --size tall.
-// Each scene is printed beside Table 2's row (SNOWMAN LG. / SM.; the sphere has no row: Table 2's
+// Each scene is printed beside Table 2's row (SPICES, SANDCASTLE, SNOWMAN LG. / SM.; the sphere has no row: Table 2's
 // range over its four scenes). P_a opt uses AcceptanceEstimate::P_a_safe (docs/meng15_hybrid.md:
 // robust preview moments, kept at 1 unless the predicted gain is resolved); when it is 1 the
 // P_a = 1 render is reused (the same paths: no timing noise between the two rows).
 //
 //   meng15_table2_ttuv [--quality quick|full] [--out DIR] [--seed S] [--threads N] [--scenes a,b]
-//                      [--spp N] [--width W] [--size R] [--absorption A] [--preview-stride K] [--obj FILE]
+//                      [--spp N] [--width W] [--size R] [--castle-size C] [--absorption A] [--preview-stride K]
+//                      [--obj FILE]
 //
 // ttuv per measuring.md: per pixel the sample variance over spp >= 8 independent bundle samples
 // (B = spp batches), averaged over the pixels, times the thread CPU seconds of a 1-spp image;
@@ -30,6 +36,7 @@
 #include <vector>
 
 #include "common/harness.hpp"
+#include "meng15_scenes.hpp"
 #include "grainlight/geometry/grains.hpp"
 #include "grainlight/geometry/procedural_boundaries.hpp"
 #include "grainlight/integrators/hybrid.hpp"
@@ -47,8 +54,9 @@ using namespace gl_examples;
 
 namespace {
 
-using Medium = gl::ContinuousMedium<gl::TabulatedPhase<float, gl::RGB>, gl::RGB>;
-using SceneT = gl::Scene<Medium>;
+using meng15::Composite;
+using meng15::Panel;
+using meng15::SceneT;
 
 // Meng15 Table 2 (ttuv in seconds; speedups over EPT in parentheses there).
 struct PaperRow {
@@ -91,10 +99,10 @@ struct RunConfig {
     double exposure = 0;
 };
 
+// One scene: one or more panels (equal sizes) measured as one image (meng15_scenes.hpp).
 template <class Shape, class Distance, class Camera>
-SceneResult run_scene(const Example& ex, const std::string& key, const gl::GranularAggregate<Shape>& agg,
-                      const SceneT& scene_ept, const SceneT& scene_vpt, const gl::HybridContext<Distance>& ctx,
-                      const Camera& camera, const RunConfig& rc, int paper_row) {
+SceneResult run_scene(const Example& ex, const std::string& key, const std::vector<Panel<Shape, Distance, Camera>>& panels,
+                      const RunConfig& rc, int paper_row) {
     struct Tech {
         const char* name;
         gl::HybridMode mode;
@@ -107,9 +115,7 @@ SceneResult run_scene(const Example& ex, const std::string& key, const gl::Granu
                            {"EPT+VPT+DA Pa=opt", gl::HybridMode::ept_vpt_da, true}};
     SceneResult res;
     res.key = key;
-    const int W = camera.width(), H = camera.height();
-    const double npx = double(W) * double(H);
-    gl::HybridImages ept_img, last_p1;
+    Composite last_p1;
     Measured ept_row, last_p1_row;
     std::printf("\n  %-18s %6s %11s %11s %13s %10s %9s %17s %7s %6s\n", "technique", "P_a", "ttuv", "ttuv_high",
                 "speedup", "sp_high", "mean", "bias vs EPT", "switch", "DA/pth");
@@ -120,57 +126,57 @@ SceneResult run_scene(const Example& ex, const std::string& key, const gl::Granu
         opt.ept.max_events = rc.max_events;
         opt.vpt.max_depth = rc.vpt_depth;
         double Pa = 1.0;
+        std::vector<double> Pa_panel;
         if (t.opt) {
-            const gl::AcceptanceEstimate a = gl::estimate_optimal_acceptance(
-                scene_ept, scene_vpt, agg, ctx, camera, rc.spp, rc.seed + 1, rc.threads, opt, rc.preview_stride);
-            Pa = a.P_a_safe;
-            std::printf("  %-18s preview (every %dth pixel): V_L %.3g V_H %.3g t_L %.3g t_H %.3g -> Eq. 8 %.3f; moments %.3f; "
-                        "robust V %.3g E[H^2] %.3g -> %.3f (predicted gain %.2f +- %.2f) -> P_a %.3f\n",
-                        t.name, rc.preview_stride, a.V_L, a.V_H, a.t_L, a.t_H, a.P_a, a.P_a_moments, a.V_robust, a.M_robust,
-                        a.P_a_robust, a.gain, a.gain_se, Pa);
+            // Per panel (per aggregate) P_a; the row's P_a is their largest.
+            Pa = 0.0;
+            for (const auto& p : panels) {
+                const gl::AcceptanceEstimate a = gl::estimate_optimal_acceptance(
+                    *p.ept, *p.vpt, *p.agg, *p.ctx, *p.camera, rc.spp, rc.seed + 1, rc.threads, opt, rc.preview_stride);
+                Pa_panel.push_back(a.P_a_safe);
+                Pa = std::max(Pa, a.P_a_safe);
+                std::printf("  %-18s %s preview (every %dth pixel): V_L %.3g V_H %.3g t_L %.3g t_H %.3g -> Eq. 8 %.3f; moments %.3f; "
+                            "robust V %.3g E[H^2] %.3g -> %.3f (predicted gain %.2f +- %.2f) -> P_a %.3f\n",
+                            t.name, p.name.c_str(), rc.preview_stride, a.V_L, a.V_H, a.t_L, a.t_H, a.P_a, a.P_a_moments,
+                            a.V_robust, a.M_robust, a.P_a_robust, a.gain, a.gain_se, a.P_a_safe);
+            }
         }
-        opt.acceptance = Pa;
-        gl::HybridImages img;
+        const bool all_one = std::all_of(Pa_panel.begin(), Pa_panel.end(), [](double v) { return v == 1.0; });
+        opt.acceptance = 1.0;
+        Composite img;
         Measured m;
         m.technique = t.name;
         m.Pa = Pa;
-        if (t.opt && Pa == 1.0) {
+        if (t.opt && all_one) {
             img = last_p1;
             m = last_p1_row;
             m.technique = t.name;
             m.reused = true;
         } else {
-            ProgressBar bar(key + " " + t.name, std::uint64_t(H));
-            img = gl::render_hybrid(scene_ept, scene_vpt, agg, ctx, camera, rc.spp, rc.seed, rc.threads, opt, 1,
-                                    [&](int n) { bar.advance(std::uint64_t(n)); });
-            bar.done();
-            const gl::Image all = img.combined();
-            m.mean = (all.mean(0) + all.mean(1) + all.mean(2)) / 3.0;
-            m.mean_se = std::sqrt(img.var_total / (double(rc.spp) * npx));
+            img = meng15::render_panels(panels, rc.spp, rc.seed, rc.threads, opt, key + " " + t.name, Pa_panel);
+            const gl::Image all = img.image(Composite::Part::combined);
+            m.mean = img.mean;
+            m.mean_se = img.mean_se;
             m.ttuv = img.ttuv();
-            m.ttuv_se = img.var_total_se * img.seconds_per_spp();
+            m.ttuv_se = img.ttuv_se();
             m.ttuv_high = img.ttuv_high();
-            const double paths = double(img.counters.paths);
-            m.switched = (double(img.counters.switched) + double(img.counters.rejected)) / paths;
-            m.switch_depth = img.counters.switched ? double(img.counters.switch_depth) / double(img.counters.switched) : 0.0;
-            m.da_per_path = double(img.counters.da) / paths;
-            m.cpu = img.cpu_seconds_low + img.cpu_seconds_high;
+            m.switched = img.switched / img.paths;
+            m.switch_depth = img.switched > 0 ? img.switch_depth / img.switched : 0.0;
+            m.da_per_path = img.da / img.paths;
+            m.cpu = img.cpu();
             std::string file = key + "_" + t.name;
             for (char& ch : file) ch = (ch == ' ' || ch == '+' || ch == '=') ? '_' : char(std::tolower(ch));
             gl::write_exr(ex.out() / (file + ".exr"), all);
             gl::write_png(ex.out() / (file + ".png"), all, {rc.exposure});
             if (t.mode == gl::HybridMode::ept_vpt_da) {
                 // Fig. 12: per-technique contributions and the switch depth.
-                gl::write_exr(ex.out() / (file + "_ept.exr"), img.ept_image());
-                gl::write_exr(ex.out() / (file + "_vpt.exr"), img.vpt_image());
-                gl::write_exr(ex.out() / (file + "_da.exr"), img.da_image());
-                gl::write_exr(ex.out() / (file + "_switch_depth.exr"), img.switch_depth);
+                gl::write_exr(ex.out() / (file + "_ept.exr"), img.image(Composite::Part::ept));
+                gl::write_exr(ex.out() / (file + "_vpt.exr"), img.image(Composite::Part::vpt));
+                gl::write_exr(ex.out() / (file + "_da.exr"), img.image(Composite::Part::da));
+                gl::write_exr(ex.out() / (file + "_switch_depth.exr"), img.image(Composite::Part::switch_depth));
             }
         }
-        if (t.mode == gl::HybridMode::ept) {
-            ept_img = img;
-            ept_row = m;
-        }
+        if (t.mode == gl::HybridMode::ept) ept_row = m;
         m.speed = ept_row.ttuv / m.ttuv;
         m.speed_high = m.ttuv_high > 0 ? ept_row.ttuv_high / m.ttuv_high : 0.0;
         m.speed_se = m.speed * std::hypot(ept_row.ttuv_se / ept_row.ttuv, t.mode == gl::HybridMode::ept ? 0.0 : m.ttuv_se / m.ttuv);
@@ -216,47 +222,6 @@ SceneResult run_scene(const Example& ex, const std::string& key, const gl::Granu
     return res;
 }
 
-// Snow grains (the snow preset's shape, ior 1.31) with a faint ice-like absorption per grain
-// radius (green = `absorption`; red x2, blue x0.5) so that paths stay finite; MD packing.
-struct Grains {
-    gl::PeriodicTile tile;
-    gl::GrainPreset preset;
-    gl::GrainStats stats;
-    gl::EffectiveRteParams rte;
-    gl::HybridDiffusion diffusion;
-    Medium medium;
-};
-
-Grains make_grains(std::uint64_t seed, bool full, double absorption, int level) {
-    const auto packed = gl::md_pack(full ? 400 : 200, 0.6, seed);
-    const double s = 1.0 / packed.tile.radius();
-    std::vector<gl::Vec3d> centers = packed.tile.centers();
-    for (auto& c : centers) c *= s;
-    gl::PeriodicTile tile(packed.tile.side() * s, 1.0, std::move(centers));
-    gl::GrainPreset p = gl::grain_preset("snow");
-    p.material = gl::GrainMaterial::make_absorbing_dielectric(1.31, gl::RGBd{2.0 * absorption, absorption, 0.5 * absorption});
-    gl::ScatterometerConfig cfg;
-    cfg.rays = full ? 400000 : 100000;
-    cfg.seed = seed;
-    gl::GrainStats stats = gl::run_scatterometer(gl::ScatterometerGrain::procedural(p.shape, p.radius, p.material, p.seed, level), cfg);
-    const gl::EffectiveRteParams rte = gl::effective_rte_params(stats, tile.packing_fraction(), 1.0);
-    Medium medium = gl::make_effective_medium<float, gl::RGB>(stats, tile.packing_fraction(), 1.0);
-    return Grains{std::move(tile), p, stats, rte, gl::make_hybrid_diffusion(rte), std::move(medium)};
-}
-
-// Ground + a small warm quad light high on one side + a dim blue sky, sized to the object.
-SceneT make_lit_scene(float R) {
-    SceneT sc;
-    // The ground one grain radius below y = 0 (not coplanar with the snowman's flat bottom).
-    sc.add_shape(gl::QuadShape<float>(gl::Vec3f(-8 * R, -1.0f, -8 * R), gl::Vec3f(0, 0, 16 * R), gl::Vec3f(16 * R, 0, 0)),
-                 gl::Material<float, gl::RGB>::diffuse(gl::RGB{0.45f, 0.45f, 0.45f}));
-    sc.add_quad_light(gl::QuadShape<float>(gl::Vec3f(1.2f * R, 4.0f * R, 1.2f * R), gl::Vec3f(0.8f * R, 0, 0),
-                                           gl::Vec3f(0, 0, 0.8f * R)),
-                      gl::RGB{60.0f, 57.0f, 52.0f});
-    sc.add_light(SceneT::LightT::environment_light(gl::RGB{0.04f, 0.05f, 0.08f}));
-    return sc;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -264,10 +229,14 @@ int main(int argc, char** argv) {
                "Meng15 Table 2: ttuv and speedups of EPT+VPT and EPT+VPT+DA over EPT on snow_sphere / snowman stand-ins",
                [&](Example& ex) {
         const std::string scenes_arg =
-            ex.opt<std::string>("scenes", "snow_sphere,snowman_1m", "snow_sphere,snowman_1m,snowman_10cm", "scenes to render");
+            ex.opt<std::string>("scenes", "snow_sphere,snowman_1m,spices", "snow_sphere,snowman_1m,snowman_10cm,spices,sandcastle,glass_bead_cube",
+                                "scenes to render (snow_sphere, snowman_1m, snowman_10cm, spices, sandcastle, glass_bead_cube, obj)");
         const int spp = ex.opt<int>("spp", 8, 8, "bundles of 16 paths per pixel (>= 8: the variance batches)");
         const int width = ex.opt<int>("width", 64, 96, "image width (height = 3/4 width)");
         const double size = ex.opt<double>("size", 60.0, 400.0, "snowman height / 2.5 x sphere radius, in grain radii");
+        const double castle = ex.opt<double>("castle-size", 60.0, 5200.0,
+                                             "sandcastle width in grain radii (5200: ~2e9 sand grains, Fig. 1's scale)");
+        const double beads = ex.opt<double>("beads", 15000.0, 120000.0, "glass beads in glass_bead_cube (Moon07 Fig. 9)");
         const double absorption = ex.opt<double>("absorption", 1e-3, 3e-4, "grain interior absorption per grain radius (green)");
         const int stride = ex.opt<int>("preview-stride", 4, 4, "P_a preview: every k-th pixel in x and y");
         const int level = ex.opt<int>("grain-level", 3, 4, "icosphere level of the snow grain mesh");
@@ -277,6 +246,8 @@ int main(int argc, char** argv) {
         if (spp < 8 || spp > 4096) throw cli_error("--spp must be in [8, 4096] (measuring.md: >= 8 batches)");
         if (width < 8 || width > 2048) throw cli_error("--width must be in [8, 2048]");
         if (!(size >= 10 && size <= 5000)) throw cli_error("--size must be in [10, 5000] grain radii");
+        if (!(castle >= 10 && castle <= 1e5)) throw cli_error("--castle-size must be in [10, 1e5] grain radii");
+        if (!(beads >= 100 && beads <= 1e9)) throw cli_error("--beads must be in [100, 1e9]");
         if (!(absorption >= 0 && absorption <= 0.1)) throw cli_error("--absorption must be in [0, 0.1]");
         if (stride < 1 || stride > 50) throw cli_error("--preview-stride must be in [1, 50]");
         if (level < 1 || level > 5) throw cli_error("--grain-level must be in [1, 5]");
@@ -286,8 +257,10 @@ int main(int argc, char** argv) {
             std::string s;
             while (std::getline(ss, s, ','))
                 if (!s.empty()) {
-                    if (s != "snow_sphere" && s != "snowman_1m" && s != "snowman_10cm" && s != "obj")
-                        throw cli_error("--scenes: '" + s + "' is not one of snow_sphere, snowman_1m, snowman_10cm, obj");
+                    if (s != "snow_sphere" && s != "snowman_1m" && s != "snowman_10cm" && s != "spices" && s != "sandcastle" &&
+                        s != "glass_bead_cube" && s != "obj")
+                        throw cli_error("--scenes: '" + s +
+                                        "' is not one of snow_sphere, snowman_1m, snowman_10cm, spices, sandcastle, glass_bead_cube, obj");
                     if (s == "obj" && obj.empty()) throw cli_error("--scenes obj needs --obj FILE");
                     scenes.push_back(s);
                 }
@@ -301,7 +274,7 @@ int main(int argc, char** argv) {
         rc.exposure = exposure;
         const int height = std::max(6, width * 3 / 4);
 
-        const Grains g = make_grains(ex.seed(), ex.full(), absorption, level);
+        const meng15::Grains g = meng15::make_snow_grains(ex.seed(), ex.full(), absorption, level);
         std::printf("Meng15 Table 2 stand-ins: snow grains (ior 1.31, absorption %.2g /R green), f = %.3f, albedo %.4f, "
                     "sigma_t %.3f /R, g %.3f, d_DA = %.2f R; %dx%d px, %d bundles x 16 paths per pixel\n",
                     absorption, g.tile.packing_fraction(), g.stats.alpha_s(1), g.rte.sigma_t[1], g.rte.g[1], g.diffusion.d_DA,
@@ -313,15 +286,37 @@ int main(int argc, char** argv) {
         std::string scenes_json;
         for (const std::string& key : scenes) {
             SceneResult r;
-            if (key == "snow_sphere") {
+            if (key == "spices") {
+                // Fig. 12's four heaps (flour, pink salt, brown sugar, cane sugar), one aggregate per
+                // panel, measured as one image of four panels (meng15_scenes.hpp).
+                const double Rh = 0.5 * size;
+                const auto heaps = meng15::make_spice_panels(Rh, absorption, std::max(8, width / 2), std::max(6, height / 2),
+                                                             ex.seed(), ex.full(), level);
+                std::printf("\nscene spices: four heaps of radius %.0f grain radii (flour, pink salt, brown sugar, cane sugar), "
+                            "%dx%d px each; albedo (green) / d_DA:",
+                            Rh, std::max(8, width / 2), std::max(6, height / 2));
+                for (const auto& h : heaps) std::printf(" %s %.4f / %.2f R", h->name.c_str(), h->grains.stats.alpha_s(1), h->grains.diffusion.d_DA);
+                std::printf("\n");
+                r = run_scene(ex, key, meng15::panels_of(heaps), rc, 0);
+            } else if (key == "sandcastle") {
+                const auto sc = meng15::make_sandcastle_panel(0.5 * castle, width, height, ex.seed(), ex.full(), level);
+                std::printf("\nscene sandcastle: castle of sand grains %.0f grain radii wide (%zu triangles, ~%.3g grains; "
+                            "albedo %.4f, d_DA = %.2f R)\n",
+                            castle, sc[0]->mesh.triangle_count(), sc[0]->grain_count, sc[0]->grains.stats.alpha_s(1),
+                            sc[0]->grains.diffusion.d_DA);
+                r = run_scene(ex, key, meng15::panels_of(sc), rc, 1);
+            } else if (key == "glass_bead_cube") {
+                const auto cube = meng15::make_glass_bead_cube(beads, width, height, ex.seed(), ex.full());
+                std::printf("\nscene glass_bead_cube: Moon07 Fig. 9's cube of %.0f glass beads (RSA f = 0.3), side %.1f bead radii "
+                            "(albedo %.4f, d_DA = %.2f R)\n",
+                            beads, cube->L, cube->grains.stats.alpha_s(1), cube->grains.diffusion.d_DA);
+                r = run_scene(ex, key, cube->panels(), rc, -1);
+            } else if (key == "snow_sphere") {
                 const double Rb = size / 2.5;
                 const gl::SphereBoundary shape(gl::Vec3d(0.0, Rb, 0.0), Rb);
-                const gl::GranularAggregate<gl::SphereBoundary> agg(
-                    g.tile, gl::VoxelizedBoundary<gl::SphereBoundary>(shape, g.tile.side()),
-                    {gl::GrainExemplar::procedural(g.preset.shape, g.preset.radius, g.preset.material, g.preset.seed, level)},
-                    {1.0}, ex.seed());
+                const gl::GranularAggregate<gl::SphereBoundary> agg = g.aggregate(shape, ex.seed());
                 const float R = float(Rb);
-                SceneT ept = make_lit_scene(R);
+                SceneT ept = meng15::make_lit_scene(R);
                 SceneT vpt = ept;
                 const int m = vpt.add_medium(g.medium);
                 const int b = vpt.add_shape(gl::SphereShape<float>(gl::Vec3f(0.0f, R, 0.0f), R),
@@ -330,7 +325,10 @@ int main(int argc, char** argv) {
                 const gl::PinholeCamera<float> cam(gl::Vec3f(0.0f, 1.6f * R, 4.2f * R), gl::Vec3f(0.0f, 0.9f * R, 0.0f),
                                                    gl::Vec3f(0, 1, 0), 36.0f, width, height);
                 std::printf("\nscene snow_sphere: sphere of radius %.0f grain radii (Fig. 11's object)\n", Rb);
-                r = run_scene(ex, key, agg, ept, vpt, ctx, cam, rc, -1);
+                r = run_scene(ex, key,
+                              std::vector<Panel<gl::SphereBoundary, gl::BoundaryDistance<gl::SphereBoundary>, gl::PinholeCamera<float>>>{
+                                  {key, &agg, &ept, &vpt, &ctx, &cam}},
+                              rc, -1);
             } else {
                 const bool small = key == "snowman_10cm";
                 const double Hs = small ? size / 10.0 : size;
@@ -348,12 +346,9 @@ int main(int argc, char** argv) {
                     mesh = gl::make_snowman_mesh(Hs, ex.full() ? 192 : 96, ex.full() ? 128 : 64);
                 }
                 const gl::MeshBoundary shape(mesh);
-                const gl::GranularAggregate<gl::MeshBoundary> agg(
-                    g.tile, gl::VoxelizedBoundary<gl::MeshBoundary>(shape, g.tile.side()),
-                    {gl::GrainExemplar::procedural(g.preset.shape, g.preset.radius, g.preset.material, g.preset.seed, level)},
-                    {1.0}, ex.seed());
+                const gl::GranularAggregate<gl::MeshBoundary> agg = g.aggregate(shape, ex.seed());
                 const float R = float(0.4 * Hs);
-                SceneT ept = make_lit_scene(R);
+                SceneT ept = meng15::make_lit_scene(R);
                 SceneT vpt = ept;
                 const int m = vpt.add_medium(g.medium);
                 const gl::HybridContext<gl::MeshDistance> ctx = gl::add_mesh_boundary(vpt, mesh, m, &g.diffusion);
@@ -365,9 +360,12 @@ int main(int argc, char** argv) {
                             key.c_str(), key == "obj" ? obj.c_str() : "snowman", Hs,
                             key == "obj" ? "user mesh" : small ? "Fig. 13 bottom: grain radius x10" : "Fig. 13 top",
                             mesh.triangle_count());
-                r = run_scene(ex, key, agg, ept, vpt, ctx, cam, rc, key == "obj" ? -1 : small ? 3 : 2);
+                r = run_scene(ex, key,
+                              std::vector<Panel<gl::MeshBoundary, gl::MeshDistance, gl::PinholeCamera<float>>>{
+                                  {key, &agg, &ept, &vpt, &ctx, &cam}},
+                              rc, key == "obj" ? -1 : small ? 3 : 2);
             }
-            const int prow = key == "snowman_1m" ? 2 : key == "snowman_10cm" ? 3 : -1;
+            const int prow = key == "snowman_1m" ? 2 : key == "snowman_10cm" ? 3 : key == "spices" ? 0 : key == "sandcastle" ? 1 : -1;
             for (std::size_t i = 0; i < r.rows.size(); ++i) {
                 const Measured& m = r.rows[i];
                 const double ps = i == 0 ? 1.0 : prow >= 0 ? table2_speedup[prow][i - 1] : 0.0;
