@@ -98,6 +98,7 @@ if(TARGET meng15_hybrid_convergence OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${P
                    --spp 2 --radius 10 --width 40 --threads 2 --pa 0.5 --seed 3)
   set_tests_properties(meng15_hybrid_convergence_kill_resume PROPERTIES LABELS "example;hybrid;checkpoint" TIMEOUT 300
     PASS_REGULAR_EXPRESSION "byte-identical")
+endif()
 if(TARGET meng15_fig12_spices OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/meng15_fig12_spices.cpp))
   # Fig. 12 at quick (four heaps of 30 grain radii, 32 x 24 px each, ~1 min): every key finite; the
   # hybrid's mean within 15 % (VPT) / 30 % (DA) of EPT's; each technique contributes (shares > 0,
