@@ -210,11 +210,10 @@ private:
     // Triangles tested side by side in a leaf.
     static constexpr int lanes = 4;
 
-    // Per-lane outcome of the watertight test without the t-range check: ok = inside and det != 0;
-    // redo = an edge function was exactly 0 in float (the scalar test decides, with its double path).
+    // Per-lane values of the watertight test before its sign and t-range checks: the edge
+    // functions U, V, W, det = U + V + W, and t, b1, b2 (already divided by det).
     struct LaneResult {
-        F t[lanes], b1[lanes], b2[lanes];
-        bool ok[lanes], redo[lanes];
+        F U[lanes], V[lanes], W[lanes], det[lanes], t[lanes], b1[lanes], b2[lanes];
     };
 
     // Corner v of reordered triangle i.
@@ -224,34 +223,36 @@ private:
     }
 
     // The arithmetic of intersect_triangle_watertight, operation for operation (same rounding), on
-    // triangles [base, base + lanes); px/py/pz are the SoA rows of axes kx/ky/kz.
+    // triangles [base, base + lanes); px/py/pz are the SoA rows of axes kx/ky/kz. One short loop
+    // per step so that the compiler packs the 4 lanes into vector instructions.
     void test_lanes(const WatertightRay<F>& r, const F* px, const F* py, const F* pz, std::uint32_t base,
                     LaneResult& out) const noexcept {
-        const F ox = r.o[r.kx], oy = r.o[r.ky], oz = r.o[r.kz];
+        const F ox = r.o[r.kx], oy = r.o[r.ky], oz = r.o[r.kz], sx = r.sx, sy = r.sy, sz = r.sz;
         const std::size_t s = stride_;
         const F* x0 = px + base; const F* x1 = x0 + s; const F* x2 = x1 + s;
         const F* y0 = py + base; const F* y1 = y0 + s; const F* y2 = y1 + s;
         const F* z0 = pz + base; const F* z1 = z0 + s; const F* z2 = z1 + s;
-        for (int j = 0; j < lanes; ++j) {
-            const F Az = z0[j] - oz, Bz = z1[j] - oz, Cz = z2[j] - oz;
-            const F ax = (x0[j] - ox) - r.sx * Az, ay = (y0[j] - oy) - r.sy * Az;
-            const F bx = (x1[j] - ox) - r.sx * Bz, by = (y1[j] - oy) - r.sy * Bz;
-            const F cx = (x2[j] - ox) - r.sx * Cz, cy = (y2[j] - oy) - r.sy * Cz;
-            const F U = cx * by - cy * bx;
-            const F V = ax * cy - ay * cx;
-            const F W = bx * ay - by * ax;
-            bool redo = false;
-            if constexpr (sizeof(F) < sizeof(double)) redo = (U == F(0)) | (V == F(0)) | (W == F(0));
-            const bool outside = ((U < F(0)) | (V < F(0)) | (W < F(0))) & ((U > F(0)) | (V > F(0)) | (W > F(0)));
-            const F det = U + V + W;
-            const F T = U * (r.sz * Az) + V * (r.sz * Bz) + W * (r.sz * Cz);
-            const F inv_det = F(1) / det;
-            out.t[j] = T * inv_det;
-            out.b1[j] = V * inv_det;
-            out.b2[j] = W * inv_det;
-            out.ok[j] = !outside & (det != F(0));
-            out.redo[j] = redo;
-        }
+        F Az[lanes], Bz[lanes], Cz[lanes], ax[lanes], ay[lanes], bx[lanes], by[lanes], cx[lanes], cy[lanes];
+        for (int j = 0; j < lanes; ++j) Az[j] = z0[j] - oz;
+        for (int j = 0; j < lanes; ++j) Bz[j] = z1[j] - oz;
+        for (int j = 0; j < lanes; ++j) Cz[j] = z2[j] - oz;
+        for (int j = 0; j < lanes; ++j) ax[j] = (x0[j] - ox) - sx * Az[j];
+        for (int j = 0; j < lanes; ++j) ay[j] = (y0[j] - oy) - sy * Az[j];
+        for (int j = 0; j < lanes; ++j) bx[j] = (x1[j] - ox) - sx * Bz[j];
+        for (int j = 0; j < lanes; ++j) by[j] = (y1[j] - oy) - sy * Bz[j];
+        for (int j = 0; j < lanes; ++j) cx[j] = (x2[j] - ox) - sx * Cz[j];
+        for (int j = 0; j < lanes; ++j) cy[j] = (y2[j] - oy) - sy * Cz[j];
+        for (int j = 0; j < lanes; ++j) out.U[j] = cx[j] * by[j] - cy[j] * bx[j];
+        for (int j = 0; j < lanes; ++j) out.V[j] = ax[j] * cy[j] - ay[j] * cx[j];
+        for (int j = 0; j < lanes; ++j) out.W[j] = bx[j] * ay[j] - by[j] * ax[j];
+        for (int j = 0; j < lanes; ++j) out.det[j] = out.U[j] + out.V[j] + out.W[j];
+        F T[lanes], inv_det[lanes];
+        for (int j = 0; j < lanes; ++j)
+            T[j] = out.U[j] * (sz * Az[j]) + out.V[j] * (sz * Bz[j]) + out.W[j] * (sz * Cz[j]);
+        for (int j = 0; j < lanes; ++j) inv_det[j] = F(1) / out.det[j];
+        for (int j = 0; j < lanes; ++j) out.t[j] = T[j] * inv_det[j];
+        for (int j = 0; j < lanes; ++j) out.b1[j] = out.V[j] * inv_det[j];
+        for (int j = 0; j < lanes; ++j) out.b2[j] = out.W[j] * inv_det[j];
     }
 
     // Slab test with per-ray sign selection (no swaps); returns the entry distance in t_enter.
@@ -303,14 +304,17 @@ private:
                         const std::uint32_t i = base + j;
                         F t, b1, b2;
                         bool h;
-                        if (lr.redo[j]) {  // an edge function is 0 in float: the scalar test with its double path
+                        const F U = lr.U[j], V = lr.V[j], W = lr.W[j];
+                        if (sizeof(F) < sizeof(double) && (U == F(0) || V == F(0) || W == F(0))) {
+                            // an edge function is 0 in float: the scalar test decides, with its double path
                             h = intersect_triangle_watertight(wr, corner(i, 0), corner(i, 1), corner(i, 2), t_min,
                                                               closest, t, b1, b2);
                         } else {
                             t = lr.t[j];
                             b1 = lr.b1[j];
                             b2 = lr.b2[j];
-                            h = lr.ok[j] && t > t_min && t < closest;
+                            h = !((U < F(0) || V < F(0) || W < F(0)) && (U > F(0) || V > F(0) || W > F(0))) &&
+                                lr.det[j] != F(0) && t > t_min && t < closest;
                         }
                         if (h) {
                             found = true;
