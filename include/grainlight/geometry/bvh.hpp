@@ -160,17 +160,14 @@ public:
         }
         nodes_.reserve(2 * n);
         build(prims, 0, n, 0);
-        stride_ = n + std::size_t(lanes);  // padding: a 4-lane load past the last triangle stays inside
-        soa_.assign(9 * stride_, F(0));
+        tris_.resize(n);
         prim_ids_.resize(n);
         normals_.resize(n);
         for (std::size_t i = 0; i < n; ++i) {
             const std::uint32_t id = prims[i].id;
-            const auto c = mesh.corners(id);
-            for (int a = 0; a < 3; ++a)
-                for (int v = 0; v < 3; ++v) soa_[std::size_t(3 * a + v) * stride_ + i] = c[std::size_t(v)][a];
+            tris_[i] = mesh.corners(id);
             prim_ids_[i] = id;
-            const Vec3<F> g = glm::cross(c[1] - c[0], c[2] - c[0]);
+            const Vec3<F> g = glm::cross(tris_[i][1] - tris_[i][0], tris_[i][2] - tris_[i][0]);
             const F len = glm::length(g);
             normals_[i] = len > F(0) ? g / len : Vec3<F>(F(0), F(0), F(1));
         }
@@ -179,7 +176,7 @@ public:
     /// The flattened nodes (root first).
     [[nodiscard]] const std::vector<BvhNode<F>>& nodes() const noexcept { return nodes_; }
     /// Number of triangles.
-    [[nodiscard]] std::size_t triangle_count() const noexcept { return prim_ids_.size(); }
+    [[nodiscard]] std::size_t triangle_count() const noexcept { return tris_.size(); }
     /// Bounds of the whole mesh.
     [[nodiscard]] Aabb<F> bounds() const noexcept { return nodes_.empty() ? Aabb<F>() : nodes_[0].box; }
 
@@ -207,54 +204,6 @@ private:
         std::uint32_t id;
     };
 
-    // Triangles tested side by side in a leaf.
-    static constexpr int lanes = 4;
-
-    // Per-lane values of the watertight test before its sign and t-range checks: the edge
-    // functions U, V, W, det = U + V + W, and t, b1, b2 (already divided by det).
-    struct LaneResult {
-        F U[lanes], V[lanes], W[lanes], det[lanes], t[lanes], b1[lanes], b2[lanes];
-    };
-
-    // Corner v of reordered triangle i.
-    [[nodiscard]] Vec3<F> corner(std::uint32_t i, int v) const noexcept {
-        const std::size_t k = std::size_t(v) * stride_ + i;
-        return {soa_[k], soa_[3 * stride_ + k], soa_[6 * stride_ + k]};
-    }
-
-    // The arithmetic of intersect_triangle_watertight, operation for operation (same rounding), on
-    // triangles [base, base + lanes); px/py/pz are the SoA rows of axes kx/ky/kz. One short loop
-    // per step so that the compiler packs the 4 lanes into vector instructions.
-    void test_lanes(const WatertightRay<F>& r, const F* px, const F* py, const F* pz, std::uint32_t base,
-                    LaneResult& out) const noexcept {
-        const F ox = r.o[r.kx], oy = r.o[r.ky], oz = r.o[r.kz], sx = r.sx, sy = r.sy, sz = r.sz;
-        const std::size_t s = stride_;
-        const F* x0 = px + base; const F* x1 = x0 + s; const F* x2 = x1 + s;
-        const F* y0 = py + base; const F* y1 = y0 + s; const F* y2 = y1 + s;
-        const F* z0 = pz + base; const F* z1 = z0 + s; const F* z2 = z1 + s;
-        F Az[lanes], Bz[lanes], Cz[lanes], ax[lanes], ay[lanes], bx[lanes], by[lanes], cx[lanes], cy[lanes];
-        for (int j = 0; j < lanes; ++j) Az[j] = z0[j] - oz;
-        for (int j = 0; j < lanes; ++j) Bz[j] = z1[j] - oz;
-        for (int j = 0; j < lanes; ++j) Cz[j] = z2[j] - oz;
-        for (int j = 0; j < lanes; ++j) ax[j] = (x0[j] - ox) - sx * Az[j];
-        for (int j = 0; j < lanes; ++j) ay[j] = (y0[j] - oy) - sy * Az[j];
-        for (int j = 0; j < lanes; ++j) bx[j] = (x1[j] - ox) - sx * Bz[j];
-        for (int j = 0; j < lanes; ++j) by[j] = (y1[j] - oy) - sy * Bz[j];
-        for (int j = 0; j < lanes; ++j) cx[j] = (x2[j] - ox) - sx * Cz[j];
-        for (int j = 0; j < lanes; ++j) cy[j] = (y2[j] - oy) - sy * Cz[j];
-        for (int j = 0; j < lanes; ++j) out.U[j] = cx[j] * by[j] - cy[j] * bx[j];
-        for (int j = 0; j < lanes; ++j) out.V[j] = ax[j] * cy[j] - ay[j] * cx[j];
-        for (int j = 0; j < lanes; ++j) out.W[j] = bx[j] * ay[j] - by[j] * ax[j];
-        for (int j = 0; j < lanes; ++j) out.det[j] = out.U[j] + out.V[j] + out.W[j];
-        F T[lanes], inv_det[lanes];
-        for (int j = 0; j < lanes; ++j)
-            T[j] = out.U[j] * (sz * Az[j]) + out.V[j] * (sz * Bz[j]) + out.W[j] * (sz * Cz[j]);
-        for (int j = 0; j < lanes; ++j) inv_det[j] = F(1) / out.det[j];
-        for (int j = 0; j < lanes; ++j) out.t[j] = T[j] * inv_det[j];
-        for (int j = 0; j < lanes; ++j) out.b1[j] = out.V[j] * inv_det[j];
-        for (int j = 0; j < lanes; ++j) out.b2[j] = out.W[j] * inv_det[j];
-    }
-
     // Slab test with per-ray sign selection (no swaps); returns the entry distance in t_enter.
     static bool box_hit(const Aabb<F>& b, const Vec3<F>& o, const Vec3<F>& inv_d, const int* neg, F t0, F t1,
                         F& t_enter) noexcept {
@@ -274,9 +223,6 @@ private:
     bool traverse(const Vec3<F>& o, const Vec3<F>& d, F t_min, F t_max, TriangleHit<F>& hit) const noexcept {
         if (nodes_.empty()) return false;
         const WatertightRay<F> wr(o, d);
-        const F* ax_kx = soa_.data() + std::size_t(3 * wr.kx) * stride_;
-        const F* ax_ky = soa_.data() + std::size_t(3 * wr.ky) * stride_;
-        const F* ax_kz = soa_.data() + std::size_t(3 * wr.kz) * stride_;
         const Vec3<F> inv_d(F(1) / d.x, F(1) / d.y, F(1) / d.z);
         const int neg[3] = {inv_d.x < F(0), inv_d.y < F(0), inv_d.z < F(0)};
         struct Entry {
@@ -293,39 +239,18 @@ private:
         for (;;) {
             const BvhNode<F>& nd = nodes_[node];
             if (nd.count > 0) {
-                const std::uint32_t end = nd.offset + nd.count;
-                for (std::uint32_t base = nd.offset; base < end; base += std::uint32_t(lanes)) {
-                    // The watertight test of up to 4 triangles side by side, then the scalar
-                    // acceptance in triangle order (the same tie rule as one at a time).
-                    LaneResult lr;
-                    test_lanes(wr, ax_kx, ax_ky, ax_kz, base, lr);
-                    const std::uint32_t m = std::min<std::uint32_t>(std::uint32_t(lanes), end - base);
-                    for (std::uint32_t j = 0; j < m; ++j) {
-                        const std::uint32_t i = base + j;
-                        F t, b1, b2;
-                        bool h;
-                        const F U = lr.U[j], V = lr.V[j], W = lr.W[j];
-                        if (sizeof(F) < sizeof(double) && (U == F(0) || V == F(0) || W == F(0))) {
-                            // an edge function is 0 in float: the scalar test decides, with its double path
-                            h = intersect_triangle_watertight(wr, corner(i, 0), corner(i, 1), corner(i, 2), t_min,
-                                                              closest, t, b1, b2);
-                        } else {
-                            t = lr.t[j];
-                            b1 = lr.b1[j];
-                            b2 = lr.b2[j];
-                            h = !((U < F(0) || V < F(0) || W < F(0)) && (U > F(0) || V > F(0) || W > F(0))) &&
-                                lr.det[j] != F(0) && t > t_min && t < closest;
-                        }
-                        if (h) {
-                            found = true;
-                            closest = t;
-                            hit.t = t;
-                            hit.prim = prim_ids_[i];
-                            hit.b1 = b1;
-                            hit.b2 = b2;
-                            hit.n_geom = normals_[i];
-                            if constexpr (AnyHit) return true;
-                        }
+                for (std::uint32_t i = nd.offset; i < nd.offset + nd.count; ++i) {
+                    F t, b1, b2;
+                    if (intersect_triangle_watertight(wr, tris_[i][0], tris_[i][1], tris_[i][2], t_min, closest, t, b1,
+                                                      b2)) {
+                        found = true;
+                        closest = t;
+                        hit.t = t;
+                        hit.prim = prim_ids_[i];
+                        hit.b1 = b1;
+                        hit.b2 = b2;
+                        hit.n_geom = normals_[i];
+                        if constexpr (AnyHit) return true;
                     }
                 }
             } else {
@@ -466,10 +391,7 @@ private:
     }
 
     std::vector<BvhNode<F>> nodes_;
-    // Corners in structure-of-arrays form: component a (x, y, z) of corner v of reordered triangle
-    // i is soa_[(3 a + v) stride_ + i]; stride_ = triangle count + lanes (zero padding).
-    std::vector<F> soa_;
-    std::size_t stride_ = 0;
+    std::vector<std::array<Vec3<F>, 3>> tris_;
     std::vector<std::uint32_t> prim_ids_;
     std::vector<Vec3<F>> normals_;
 };
