@@ -1,8 +1,8 @@
-// The BVH's leaf test runs the watertight test (Woop et al. 2013) on up to 4 triangles side by
-// side; these tests check that every hit is bit-for-bit the scalar test's: the same t and
-// barycentrics as intersect_triangle_watertight on the reported triangle, and the same closest t
-// as a brute-force loop over the mesh, including rays through shared edges and vertices (where
-// an edge function is exactly 0 and the double-precision path decides).
+// Every BVH hit must be the scalar watertight test's (Woop et al. 2013), bit for bit: the same t
+// and barycentrics as intersect_triangle_watertight on the reported triangle, and the same closest
+// t as a brute-force loop over the mesh, including rays through shared edges and vertices (where
+// an edge function is exactly 0 and the double-precision path decides). Guards any change of the
+// BVH's leaf layout or traversal (a 4-wide leaf test passed it; see docs/performance.md).
 #include <catch2/catch.hpp>
 
 #include "grainlight/core/rng.hpp"
