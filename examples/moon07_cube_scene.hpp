@@ -25,6 +25,7 @@
 
 #include "common/checkpoint.hpp"
 #include "common/cli.hpp"
+#include "common/harness.hpp"
 #include "common/output.hpp"
 #include "common/progress.hpp"
 #include "grainlight/core/rng.hpp"
@@ -544,21 +545,36 @@ inline ShellVsPt compare_shells_to_pt(const BatchImages& pt, const BatchImages& 
     return r;
 }
 
+/// Where a batch render gets its checkpoint and progress bar: a harness Example (checkpoint_for,
+/// ex.progress) or, for examples on the bare Cli, RenderCheckpoints (or none).
+struct BatchHooks {
+    const gl_examples::Example* ex = nullptr;   ///< harness example (checkpoint_for, progress)
+    RenderCheckpoints* checkpoints = nullptr;   ///< bare-Cli checkpoints (when ex is null)
+    [[nodiscard]] gl::CheckpointOptions checkpoint(const std::string& stem) const {
+        if (ex) return gl_examples::checkpoint_for(*ex, stem);
+        if (checkpoints) return (*checkpoints)(stem);
+        return {};
+    }
+    [[nodiscard]] gl_examples::ProgressBar progress(const std::string& label, std::uint64_t total) const {
+        return ex ? ex->progress(label, total) : gl_examples::ProgressBar(label, total);
+    }
+};
+
 template <class Fn>
 BatchImages render_batches(const gl::PinholeCamera<double>& cam, int spp, int B, std::uint64_t seed, int threads,
-                           const std::string& label, Fn&& fn, RenderCheckpoints* checkpoints = nullptr) {
+                           const std::string& label, Fn&& fn, const BatchHooks& hooks) {
     BatchImages out;
     out.W = cam.width();
     out.H = cam.height();
     out.B = B;
-    gl_examples::ProgressBar bar(label, std::uint64_t(B) * std::uint64_t(cam.height()));
+    auto bar = hooks.progress(label, std::uint64_t(B) * std::uint64_t(cam.height()));
     const double c0 = cpu_seconds();
     for (int b = 0; b < B; ++b) {
         gl::RenderOptions ro;
         ro.spp = spp;
         ro.seed = seed * 1000003u + std::uint64_t(b);
         ro.threads = threads;
-        if (checkpoints) ro.checkpoint = (*checkpoints)(label + ".b" + std::to_string(b));
+        ro.checkpoint = hooks.checkpoint(label + ".b" + std::to_string(b));
         const gl::Film film = gl::render_image(
             cam, [&](const gl::Ray<double>& r, gl::Rng& rng) { return S1(fn(r, rng)); }, ro,
             [&](int n) { bar.advance(std::uint64_t(n)); });
@@ -570,6 +586,13 @@ BatchImages render_batches(const gl::PinholeCamera<double>& cam, int spp, int B,
     bar.done();
     out.cpu = cpu_seconds() - c0;
     return out;
+}
+
+/// As above with bare-Cli checkpoints (or none).
+template <class Fn>
+BatchImages render_batches(const gl::PinholeCamera<double>& cam, int spp, int B, std::uint64_t seed, int threads,
+                           const std::string& label, Fn&& fn, RenderCheckpoints* checkpoints = nullptr) {
+    return render_batches(cam, spp, B, seed, threads, label, std::forward<Fn>(fn), BatchHooks{nullptr, checkpoints});
 }
 
 void write_image(const std::filesystem::path& dir, const std::string& name, const std::vector<double>& v, int W, int H,
@@ -594,7 +617,7 @@ struct ShellPasses {
 template <class Radiance>
 ShellPasses render_shell_passes(const gl::PinholeCamera<double>& cam, int spp_pt, int spp_low, int spp_high, int B,
                                 std::uint64_t seed, int threads, const std::string& tag, Radiance&& radiance,
-                                RenderCheckpoints* checkpoints) {
+                                const BatchHooks& checkpoints) {
     ShellPasses p;
     p.pt = render_batches(cam, spp_pt, B, seed, threads, tag + " path tracing",
                           [&](const gl::Ray<double>& r, gl::Rng& rng) { return radiance(r, rng, Mode::pt, nullptr); },
@@ -621,6 +644,24 @@ ShellPasses render_shell_passes(const gl::PinholeCamera<double>& cam, int spp_pt
         p.ts.straight_escapes += t.straight_escapes;
     }
     return p;
+}
+
+/// As above with bare-Cli checkpoints.
+template <class Radiance>
+ShellPasses render_shell_passes(const gl::PinholeCamera<double>& cam, int spp_pt, int spp_low, int spp_high, int B,
+                                std::uint64_t seed, int threads, const std::string& tag, Radiance&& radiance,
+                                RenderCheckpoints* checkpoints) {
+    return render_shell_passes(cam, spp_pt, spp_low, spp_high, B, seed, threads, tag, std::forward<Radiance>(radiance),
+                               BatchHooks{nullptr, checkpoints});
+}
+
+/// As above for a harness example: its seed and threads, checkpoint_for(ex, ...) per batch
+/// render (removed by ex.finish()), progress bars through ex.progress.
+template <class Radiance>
+ShellPasses render_shell_passes(const gl_examples::Example& ex, const gl::PinholeCamera<double>& cam, int spp_pt,
+                                int spp_low, int spp_high, int B, const std::string& tag, Radiance&& radiance) {
+    return render_shell_passes(cam, spp_pt, spp_low, spp_high, B, ex.seed(), ex.threads(), tag,
+                               std::forward<Radiance>(radiance), BatchHooks{&ex, nullptr});
 }
 
 /// The four images <prefix>_{pt,shells,low,high}.exr/.png at the exposure 0.35 / mean_pt.
