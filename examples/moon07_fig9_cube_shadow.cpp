@@ -65,6 +65,9 @@ int main(int argc, char** argv) {
         const bool hand_back = ex.opt<bool>(
             "hand-back", false,
             "high order: shells only where they fit, explicit tracing within r_0 of the faces (no exit rule, no shadow rays)");
+        const bool clear_faces = ex.opt<bool>(
+            "clear-faces", false,
+            "cut spheres' flat faces index matched (no refraction or Fresnel at the cube's faces; isolates the faces' share of the bias)");
         ex.checkpointable();
         ex.ready();
         const bool full = ex.full();
@@ -103,6 +106,7 @@ int main(int argc, char** argv) {
         if (!whole_spheres) {  // default: the medium the shell table describes up to the faces
             scene.tile = rsa;
             scene.cut = true;
+            scene.clear_faces = clear_faces;
             kept = rsa.centers();
         }
         std::cerr << "moon07_fig9: " << kept.size() << " spheres in a cube of side " << L << " R (f = " << fraction
@@ -233,6 +237,7 @@ int main(int argc, char** argv) {
             .num("shell_steps_per_switched_path", ts.paths ? double(ts.steps) / double(ts.paths) : 0.0)
             .num("exit_fraction", ts.paths ? double(ts.exits) / double(ts.paths) : 0.0)
             .boolean("cut_spheres", scene.cut)
+            .boolean("clear_faces", scene.clear_faces)
             .boolean("exit_rule_table", to.exit_rule == gl::ShellExitRule::table)
             .boolean("hand_back", scene.hand_back)
             .integer("min_scatter", min_scatter)
