@@ -6,7 +6,7 @@
 // The scene is generic over its volume (VolumeScene<Vol>): a cube (gl::BoxDistance, CubeScene) or
 // the bowl of moon07_fig12_bowl (BowlVolume: the lower half of a ball, flat top), optionally on a
 // diffuse table instead of the black floor. Batch renders checkpoint (--checkpoint / --resume)
-// through RenderCheckpoints.
+// through the example harness (checkpoint_for, removed by ex.finish()).
 #pragma once
 #include <time.h>
 
@@ -25,6 +25,7 @@
 
 #include "common/checkpoint.hpp"
 #include "common/cli.hpp"
+#include "common/harness.hpp"
 #include "common/output.hpp"
 #include "common/progress.hpp"
 #include "grainlight/core/rng.hpp"
@@ -140,6 +141,9 @@ struct VolumeScene {
     gl::QuadShape<double> blocker;
     int max_events = 100000;
     bool cut = false;  ///< spheres cut by the volume's faces (glass faces there) instead of whole ones
+    /// Cut spheres' flat faces index matched (no refraction, no Fresnel at the volume's faces): the
+    /// scene the shells' exit rules describe (they leave along the in-medium direction).
+    bool clear_faces = false;
     double spot_cos = -2;  ///< the light emits only within acos(spot_cos) of its normal (spotlight; -2: everywhere)
     double floor_albedo = 0;  ///< Lambertian albedo of the floor z = 0 (0: black, the cube scenes)
     int max_floor_bounces = 8;  ///< paths end after this many floor bounces
@@ -302,15 +306,17 @@ struct VolumeScene {
                 if (cut) {  // entering through a cut sphere: flat glass face
                     const gl::TileHit h = tile.first_hit(gl::Vec3i64{0, 0, 0}, p, d, 0.0, 1e-9);
                     if (h && h.t_enter < 0) {
-                        const Vec3d n = face_normal(p);
-                        bool refracted = false;
-                        double eta_rel = 1;
-                        d = gl::sample_dielectric(d, n, eta, rng.uniform<double>(), refracted, eta_rel);
-                        ++events;
-                        if (!refracted) {
-                            in_cube = false;
-                            p += 1e-9 * n;
-                            continue;
+                        if (!clear_faces) {
+                            const Vec3d n = face_normal(p);
+                            bool refracted = false;
+                            double eta_rel = 1;
+                            d = gl::sample_dielectric(d, n, eta, rng.uniform<double>(), refracted, eta_rel);
+                            ++events;
+                            if (!refracted) {
+                                in_cube = false;
+                                p += 1e-9 * n;
+                                continue;
+                            }
                         }
                         in_glass = true;
                         c = tile.center(h.sphere) + Vec3d(double(h.tile.x), double(h.tile.y), double(h.tile.z)) * tile.side();
@@ -327,6 +333,12 @@ struct VolumeScene {
                 t = std::max(0.0, -b + std::sqrt(std::max(0.0, b * b - cc)));
                 if (cut && t_out < t) {  // the flat face of a cut sphere comes first
                     p += t_out * d;
+                    if (clear_faces) {  // index matched: straight out
+                        in_glass = false;
+                        in_cube = false;
+                        p += 1e-9 * tile.radius() * d;
+                        continue;
+                    }
                     const Vec3d n = face_normal(p);
                     bool refracted = false;
                     double eta_rel = 1;
@@ -440,9 +452,6 @@ struct VolumeScene {
 /// The Moon07 cube scene (moon07_fig9_cube_shadow, moon07_fig11_spotlight).
 using CubeScene = VolumeScene<gl::BoxDistance>;
 
-// RenderCheckpoints (one checkpoint per render of an example): examples/common/checkpoint.hpp.
-using gl_examples::RenderCheckpoints;
-
 /// Per-pixel batch statistics of B renders.
 struct BatchImages {
     int W = 0, H = 0, B = 0;
@@ -544,21 +553,33 @@ inline ShellVsPt compare_shells_to_pt(const BatchImages& pt, const BatchImages& 
     return r;
 }
 
+/// Where a batch render gets its checkpoint and progress bar: the harness Example
+/// (checkpoint_for, ex.progress), or none (no checkpoint, a plain progress bar).
+struct BatchHooks {
+    const gl_examples::Example* ex = nullptr;  ///< harness example (checkpoint_for, progress)
+    [[nodiscard]] gl::CheckpointOptions checkpoint(const std::string& stem) const {
+        return ex ? gl_examples::checkpoint_for(*ex, stem) : gl::CheckpointOptions{};
+    }
+    [[nodiscard]] gl_examples::ProgressBar progress(const std::string& label, std::uint64_t total) const {
+        return ex ? ex->progress(label, total) : gl_examples::ProgressBar(label, total);
+    }
+};
+
 template <class Fn>
 BatchImages render_batches(const gl::PinholeCamera<double>& cam, int spp, int B, std::uint64_t seed, int threads,
-                           const std::string& label, Fn&& fn, RenderCheckpoints* checkpoints = nullptr) {
+                           const std::string& label, Fn&& fn, const BatchHooks& hooks) {
     BatchImages out;
     out.W = cam.width();
     out.H = cam.height();
     out.B = B;
-    gl_examples::ProgressBar bar(label, std::uint64_t(B) * std::uint64_t(cam.height()));
+    auto bar = hooks.progress(label, std::uint64_t(B) * std::uint64_t(cam.height()));
     const double c0 = cpu_seconds();
     for (int b = 0; b < B; ++b) {
         gl::RenderOptions ro;
         ro.spp = spp;
         ro.seed = seed * 1000003u + std::uint64_t(b);
         ro.threads = threads;
-        if (checkpoints) ro.checkpoint = (*checkpoints)(label + ".b" + std::to_string(b));
+        ro.checkpoint = hooks.checkpoint(label + ".b" + std::to_string(b));
         const gl::Film film = gl::render_image(
             cam, [&](const gl::Ray<double>& r, gl::Rng& rng) { return S1(fn(r, rng)); }, ro,
             [&](int n) { bar.advance(std::uint64_t(n)); });
@@ -594,14 +615,14 @@ struct ShellPasses {
 template <class Radiance>
 ShellPasses render_shell_passes(const gl::PinholeCamera<double>& cam, int spp_pt, int spp_low, int spp_high, int B,
                                 std::uint64_t seed, int threads, const std::string& tag, Radiance&& radiance,
-                                RenderCheckpoints* checkpoints) {
+                                const BatchHooks& hooks) {
     ShellPasses p;
     p.pt = render_batches(cam, spp_pt, B, seed, threads, tag + " path tracing",
                           [&](const gl::Ray<double>& r, gl::Rng& rng) { return radiance(r, rng, Mode::pt, nullptr); },
-                          checkpoints);
+                          hooks);
     p.lo = render_batches(cam, spp_low, B, seed + 1, threads, tag + " low order",
                           [&](const gl::Ray<double>& r, gl::Rng& rng) { return radiance(r, rng, Mode::low, nullptr); },
-                          checkpoints);
+                          hooks);
     std::vector<gl::ShellTraceStats> tstats(256);  // per thread, summed after the render
     p.hi = render_batches(cam, spp_high, B, seed + 2, threads, tag + " high order (shells)",
                           [&](const gl::Ray<double>& r, gl::Rng& rng) {
@@ -612,7 +633,7 @@ ShellPasses render_shell_passes(const gl::PinholeCamera<double>& cam, int spp_pt
 #endif
                               return radiance(r, rng, Mode::high, &tstats[std::size_t(tid)]);
                           },
-                          checkpoints);
+                          hooks);
     for (const auto& t : tstats) {
         p.ts.paths += t.paths;
         p.ts.steps += t.steps;
@@ -621,6 +642,15 @@ ShellPasses render_shell_passes(const gl::PinholeCamera<double>& cam, int spp_pt
         p.ts.straight_escapes += t.straight_escapes;
     }
     return p;
+}
+
+/// As above for a harness example: its seed and threads, checkpoint_for(ex, ...) per batch
+/// render (removed by ex.finish()), progress bars through ex.progress.
+template <class Radiance>
+ShellPasses render_shell_passes(const gl_examples::Example& ex, const gl::PinholeCamera<double>& cam, int spp_pt,
+                                int spp_low, int spp_high, int B, const std::string& tag, Radiance&& radiance) {
+    return render_shell_passes(cam, spp_pt, spp_low, spp_high, B, ex.seed(), ex.threads(), tag,
+                               std::forward<Radiance>(radiance), BatchHooks{&ex});
 }
 
 /// The four images <prefix>_{pt,shells,low,high}.exr/.png at the exposure 0.35 / mean_pt.

@@ -23,52 +23,49 @@
 #include "moon07_cube_scene.hpp"
 
 int main(int argc, char** argv) {
-    return gl_examples::run_main("moon07_fig11_spotlight", [&]() -> int {
-        gl_examples::Cli cli(argc, argv, "moon07_fig11_spotlight",
-                             "Moon07 Fig. 11: cube of glass spheres under a spotlight, path tracing vs low-order PT + shells");
-        cli.option("spheres", "number of glass spheres (paper: 120000)", "15000 quick, 120000 full")
-            .option("fraction", "packing fraction of the RSA spheres, (0, 0.35]", "0.3")
-            .option("width", "image width (height = 3/4 width)", "128 quick, 512 full")
-            .option("spp-pt", "path-tracing samples per pixel per batch", "48 quick, 48 full")
-            .option("spp-low", "low-order samples per pixel per batch", "16 quick, 16 full")
-            .option("spp-high", "high-order (shell) samples per pixel per batch", "8 quick, 8 full")
-            .option("light-size", "side of the square spot emitter / L", "0.05")
-            .option("spot-angle", "half-angle of the spot cone (deg, (0, 60])", "13")
-            .option("batches", "independent batches per image (>= 4)", "8")
-            .option("min-scatter", "switch rule: explicit interface events before shells", "3")
-            .option("switch-depth", "switch rule: depth below the cube surface to switch (R; default r_0 = 2)", "2")
-            .option("shell-paths", "paths of the shell precomputation", "20000 quick, 500000 full")
-            .option("shell-radii", "number of shell radii (paper: 12-16)", "8 quick, 12 full")
-            .option("shell-r0", "smallest shell radius r_0 (R; the correlation length)", "2")
-            .option("rebuild-table", "ignore a cached shell table in --out")
-            .option("cut-spheres", "a cube cut out of the periodic packing (flat glass faces; the default)")
-            .option("whole-spheres", "whole spheres only, centres >= R inside (a sphere-free skin the shells do not describe: +12 % bias at L = 59 R)")
-            .option("no-nee", "high order without Fig. 6's shadow rays (count escapes that hit the light)")
-            .option("exit-rule", "exits outside the cube: radial (Moon07: along y - x) or table (along the sampled T_r direction)", "table")
-            .option("hand-back", "high order: shells only where they fit, explicit tracing within r_0 of the faces (no exit rule, no shadow rays)")
-            .checkpoint_options()
-            .common_options("out/moon07_fig11_spotlight");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const std::uint64_t seed = cli.seed();
-        const int threads = cli.threads();
-        const auto n_spheres = std::size_t(cli.integer("spheres", full ? 120000 : 15000));
-        const double fraction = cli.num("fraction", 0.3);
-        const int W = int(cli.integer("width", full ? 512 : 128));
+    return gl_examples::run(
+        argc, argv, "moon07_fig11_spotlight",
+        "Moon07 Fig. 11: cube of glass spheres under a spotlight, path tracing vs low-order PT + shells",
+        "out/moon07_fig11_spotlight", [&](gl_examples::Example& ex) -> int {
+        const auto n_spheres = ex.opt<std::size_t>("spheres", 15000, 120000, "number of glass spheres (paper: 120000)");
+        const double fraction = ex.opt<double>("fraction", 0.3, "packing fraction of the RSA spheres, (0, 0.35]");
+        const int W = ex.opt<int>("width", 128, 512, "image width (height = 3/4 width)");
         const int H = std::max(1, W * 3 / 4);
-        const int spp_pt = int(cli.integer("spp-pt", 48));
-        const int spp_low = int(cli.integer("spp-low", 16));
-        const int spp_high = int(cli.integer("spp-high", 8));
-        const int B = int(cli.integer("batches", 8));
-        const double light_size = cli.num("light-size", 0.05);
-        const double spot_angle = cli.num("spot-angle", 13.0);
+        const int spp_pt = ex.opt<int>("spp-pt", 48, "path-tracing samples per pixel per batch");
+        const int spp_low = ex.opt<int>("spp-low", 16, "low-order samples per pixel per batch");
+        const int spp_high = ex.opt<int>("spp-high", 8, "high-order (shell) samples per pixel per batch");
+        const double light_size = ex.opt<double>("light-size", 0.05, "side of the square spot emitter / L");
+        const double spot_angle = ex.opt<double>("spot-angle", 13.0, "half-angle of the spot cone (deg, (0, 60])");
+        const int B = ex.opt<int>("batches", 8, "independent batches per image (>= 4)");
+        const int min_scatter = ex.opt<int>("min-scatter", 3, "switch rule: explicit interface events before shells");
+        const double switch_depth = ex.opt<double>(
+            "switch-depth", 2.0, "switch rule: depth below the cube surface to switch (R; default r_0 = 2)");
+        const std::uint64_t shell_paths =
+            ex.opt<std::uint64_t>("shell-paths", 20000, 500000, "paths of the shell precomputation");
+        const int n_radii = ex.opt<int>("shell-radii", 8, 12, "number of shell radii (paper: 12-16)");
+        const double shell_r0 = ex.opt<double>("shell-r0", 2.0, "smallest shell radius r_0 (R; the correlation length)");
+        const bool rebuild_table = ex.opt<bool>("rebuild-table", false, "ignore a cached shell table in --out");
+        (void)ex.opt<bool>("cut-spheres", true,
+                           "a cube cut out of the periodic packing (flat glass faces; the default)");
+        const bool whole_spheres = ex.opt<bool>(
+            "whole-spheres", false,
+            "whole spheres only, centres >= R inside (a sphere-free skin the shells do not describe: +12 % bias at L = 59 R)");
+        const bool no_nee =
+            ex.opt<bool>("no-nee", false, "high order without Fig. 6's shadow rays (count escapes that hit the light)");
+        const std::string exit_rule = ex.opt<std::string>(
+            "exit-rule", "table",
+            "exits outside the cube: radial (Moon07: along y - x) or table (along the sampled T_r direction)");
+        const bool hand_back = ex.opt<bool>(
+            "hand-back", false,
+            "high order: shells only where they fit, explicit tracing within r_0 of the faces (no exit rule, no shadow rays)");
+        ex.checkpointable();
+        ex.ready();
+        const bool full = ex.full();
+        const std::uint64_t seed = ex.seed();
         if (!(spot_angle > 0 && spot_angle <= 60))
             throw gl_examples::cli_error("--spot-angle = " + std::to_string(spot_angle) + " must be in (0, 60]");
         if (!(light_size > 0 && light_size <= 1))
             throw gl_examples::cli_error("--light-size = " + std::to_string(light_size) + " must be in (0, 1]");
-        const int min_scatter = int(cli.integer("min-scatter", 3));
-        const std::uint64_t shell_paths = cli.integer("shell-paths", full ? 500000 : 20000);
-        const int n_radii = int(cli.integer("shell-radii", full ? 12 : 8));
         if (n_spheres < 100) throw gl_examples::cli_error("--spheres = " + std::to_string(n_spheres) + " must be >= 100");
         if (!(fraction > 0 && fraction <= gl::rsa_max_fraction))
             throw gl_examples::cli_error("--fraction = " + std::to_string(fraction) + " must be in (0, 0.35]");
@@ -77,13 +74,11 @@ int main(int argc, char** argv) {
         if (spp_pt < 1 || spp_low < 1 || spp_high < 1) throw gl_examples::cli_error("--spp-* must be >= 1");
         if (n_radii < 2 || n_radii > 64) throw gl_examples::cli_error("--shell-radii must be in [2, 64]");
         if (shell_paths < 1000) throw gl_examples::cli_error("--shell-paths must be >= 1000");
-        const double shell_r0 = cli.num("shell-r0", 2.0);
         if (!(shell_r0 > 0 && shell_r0 < 1e6))
             throw gl_examples::cli_error("--shell-r0 = " + std::to_string(shell_r0) + " must be in (0, 1e6)");
-        const double switch_depth = cli.num("switch-depth", 2.0);
         if (!(switch_depth >= 0 && switch_depth < 1e6))
             throw gl_examples::cli_error("--switch-depth = " + std::to_string(switch_depth) + " must be in [0, 1e6)");
-        const std::filesystem::path out = cli.out_dir("out/moon07_fig11_spotlight");
+        const std::filesystem::path out = ex.out();
         const auto wall0 = std::chrono::steady_clock::now();
 
         // --- the medium: RSA spheres (radius 1) in a periodic cube of side L ---
@@ -101,7 +96,7 @@ int main(int argc, char** argv) {
                             S1(0.9 / (light_size * light_size))),
                         gl::QuadShape<double>(Vec3d(0, 0, -100 * L), Vec3d(L, 0, 0), Vec3d(0, L, 0))};  // no blocker (below the floor)
         scene.spot_cos = std::cos(spot_angle * gl::pi_v<double> / 180);
-        if (!cli.has("whole-spheres")) {  // default: the medium the shell table describes up to the faces
+        if (!whole_spheres) {  // default: the medium the shell table describes up to the faces
             scene.tile = rsa;
             scene.cut = true;
             kept = rsa.centers();
@@ -127,7 +122,7 @@ int main(int argc, char** argv) {
         double build_seconds = 0, nmf_error = -1;
         bool cached = false;
         const double b0 = cpu_seconds();
-        if (!cli.has("rebuild-table") && std::filesystem::exists(table_path)) {
+        if (!rebuild_table && std::filesystem::exists(table_path)) {
             table = gl::ShellTable::load(table_path);
             cached = true;
         } else {
@@ -148,12 +143,11 @@ int main(int argc, char** argv) {
         gl::ShellTracerOptions to;
         to.min_scatter = min_scatter;
         to.switch_depth = switch_depth;
-        to.nee = !cli.has("no-nee");
-        const std::string exit_rule = cli.str("exit-rule", "table");
+        to.nee = !no_nee;
         if (exit_rule != "radial" && exit_rule != "table")
             throw gl_examples::cli_error("--exit-rule = " + exit_rule + " must be radial or table");
         to.exit_rule = exit_rule == "table" ? gl::ShellExitRule::table : gl::ShellExitRule::radial;
-        if (cli.has("hand-back")) {
+        if (hand_back) {
             to.hand_back_depth = shell_r0 * R;
             scene.hand_back = true;
         }
@@ -191,13 +185,11 @@ int main(int argc, char** argv) {
         // --- renders (--checkpoint SECONDS / --resume: one checkpoint per batch render, kept when it
         // finishes so a resumed run skips it, all removed at the end of a completed run; the shell
         // passes' step tallies count only the rows rendered by the resumed run) ---
-        RenderCheckpoints checkpoints{&cli, out, "moon07_fig11_spotlight", {}};
         const ShellPasses passes = render_shell_passes(
-            cam, spp_pt, spp_low, spp_high, B, seed, threads, "fig11",
+            ex, cam, spp_pt, spp_low, spp_high, B, "fig11",
             [&](const gl::Ray<double>& r, gl::Rng& rng, Mode m, gl::ShellTraceStats* s) {
                 return scene.radiance(r, rng, m, &tracer, nullptr, s);
-            },
-            &checkpoints);
+            });
         const BatchImages &pt = passes.pt, &lo = passes.lo, &hi = passes.hi;
         const gl::ShellTraceStats& ts = passes.ts;
         const double high_samples = double(spp_high) * B * double(n_mask);
@@ -229,7 +221,7 @@ int main(int argc, char** argv) {
         csv.row({pt.cpu, lo.cpu, hi.cpu, speedup, mean_pt, mean_sh, rmse_pt, rmse_sh, bias_rel, spot_fraction_sh});
         // The paper's row: 28.1 h PT vs 0.78 h low + 0.27 h high on its cluster (as s), 27x, 57 % rendered.
         csv.row({28.1 * 3600, 0.78 * 3600, 0.27 * 3600, 27.0, 0, 0, 0, 0, 0, 0.57});
-        csv.write(out / "moon07_fig11_spotlight.csv");
+        ex.csv("moon07_fig11_spotlight.csv", csv);
         std::cout << "Moon07 Fig. 11 (cube of glass spheres under a spotlight), " << kept.size() << " spheres, " << W << "x"
                   << H << ", " << B << " batches\n"
                   << "  path tracing: " << pt.cpu << " CPU s (" << spp_pt * B << " spp)   paper: 28.1 h\n"
@@ -245,7 +237,7 @@ int main(int argc, char** argv) {
                   << "  shell table: raw " << raw_bytes / 1024 << " KiB -> factored " << factored_bytes / 1024
                   << " KiB   paper: ~30 MB -> 250 KB\n";
         const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-        gl_examples::Json j;
+        gl_examples::Json j = ex.summary();
         j.num("seconds_pt", pt.cpu)
             .num("seconds_low", lo.cpu)
             .num("seconds_high", hi.cpu)
@@ -284,8 +276,6 @@ int main(int argc, char** argv) {
             .num("shell_raw_bytes", raw_bytes)
             .num("shell_factored_bytes", factored_bytes)
             .num("wall_seconds", wall);
-        checkpoints.remove_all();  // the run is complete
-        std::cout << j.str() << std::endl;
-        return 0;
-    });
+        return ex.finish(j);  // removes the checkpoints of the completed run
+        });
 }

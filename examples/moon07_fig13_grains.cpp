@@ -229,44 +229,36 @@ std::vector<std::string> split_list(const std::string& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    return gl_examples::run_main("moon07_fig13_grains", [&]() -> int {
-        gl_examples::Cli cli(argc, argv, "moon07_fig13_grains",
-                             "Moon07 Fig. 13 with procedural grains: a bowl of grain meshes, explicit path tracing vs low-order EPT + shells");
-        cli.option("grains", "grains in the bowl (Fig. 13: ~10 000 glass Buddhas)", "3000 quick, 10000 full")
-            .option("presets", "exemplar presets (geometry/grains.hpp), comma separated, lossless dielectrics", "sugar,snow")
-            .option("mesh-level", "subdivision level of the grain meshes", "2 quick, 3 full")
-            .option("width", "image width (height = 3/4 width)", "64 quick, 160 full")
-            .option("spp-pt", "path-tracing samples per pixel per batch", "32 quick, 32 full")
-            .option("spp-low", "low-order samples per pixel per batch", "8 quick, 8 full")
-            .option("spp-high", "high-order (shell) samples per pixel per batch", "8 quick, 8 full")
-            .option("batches", "independent batches per image (>= 4)", "8")
-            .option("min-scatter", "switch rule: grain interactions before shells", "3")
-            .option("switch-depth", "switch rule: depth below the bowl surface to switch (R; default r_0 = 2)", "2")
-            .option("table-albedo", "Lambertian albedo of the table, [0, 1)", "0.5")
-            .option("shell-paths", "paths of the shell precomputation", "10000 quick, 200000 full")
-            .option("shell-radii", "number of shell radii (paper: 12-16)", "6 quick, 12 full")
-            .option("rebuild-table", "ignore a cached shell table in --out")
-            .option("no-continuation", "high order: end shell-traced paths at the bowl's boundary")
-            .checkpoint_options()
-            .common_options("out/moon07_fig13_grains");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const std::uint64_t seed = cli.seed();
-        const int threads = cli.threads();
-        const auto n_grains = std::size_t(cli.integer("grains", full ? 10000 : 3000));
-        const std::vector<std::string> presets = split_list(cli.str("presets", "sugar,snow"));
-        const int level = int(cli.integer("mesh-level", full ? 3 : 2));
-        const int W = int(cli.integer("width", full ? 160 : 64));
+    return gl_examples::run(
+        argc, argv, "moon07_fig13_grains",
+        "Moon07 Fig. 13 with procedural grains: a bowl of grain meshes, explicit path tracing vs low-order EPT + shells",
+        "out/moon07_fig13_grains", [&](gl_examples::Example& ex) -> int {
+        const auto n_grains =
+            ex.opt<std::size_t>("grains", 3000, 10000, "grains in the bowl (Fig. 13: ~10 000 glass Buddhas)");
+        const std::string presets_text = ex.opt<std::string>(
+            "presets", "sugar,snow", "exemplar presets (geometry/grains.hpp), comma separated, lossless dielectrics");
+        const std::vector<std::string> presets = split_list(presets_text);
+        const int level = ex.opt<int>("mesh-level", 2, 3, "subdivision level of the grain meshes");
+        const int W = ex.opt<int>("width", 64, 160, "image width (height = 3/4 width)");
         const int H = std::max(1, W * 3 / 4);
-        const int spp_pt = int(cli.integer("spp-pt", 32));
-        const int spp_low = int(cli.integer("spp-low", 8));
-        const int spp_high = int(cli.integer("spp-high", 8));
-        const int B = int(cli.integer("batches", 8));
-        const int min_scatter = int(cli.integer("min-scatter", 3));
-        const double switch_depth = cli.num("switch-depth", 2.0);
-        const double table_albedo = cli.num("table-albedo", 0.5);
-        const std::uint64_t shell_paths = cli.integer("shell-paths", full ? 200000 : 10000);
-        const int n_radii = int(cli.integer("shell-radii", full ? 12 : 6));
+        const int spp_pt = ex.opt<int>("spp-pt", 32, "path-tracing samples per pixel per batch");
+        const int spp_low = ex.opt<int>("spp-low", 8, "low-order samples per pixel per batch");
+        const int spp_high = ex.opt<int>("spp-high", 8, "high-order (shell) samples per pixel per batch");
+        const int B = ex.opt<int>("batches", 8, "independent batches per image (>= 4)");
+        const int min_scatter = ex.opt<int>("min-scatter", 3, "switch rule: grain interactions before shells");
+        const double switch_depth = ex.opt<double>(
+            "switch-depth", 2.0, "switch rule: depth below the bowl surface to switch (R; default r_0 = 2)");
+        const double table_albedo = ex.opt<double>("table-albedo", 0.5, "Lambertian albedo of the table, [0, 1)");
+        const std::uint64_t shell_paths =
+            ex.opt<std::uint64_t>("shell-paths", 10000, 200000, "paths of the shell precomputation");
+        const int n_radii = ex.opt<int>("shell-radii", 6, 12, "number of shell radii (paper: 12-16)");
+        const bool rebuild_table = ex.opt<bool>("rebuild-table", false, "ignore a cached shell table in --out");
+        const bool no_continuation =
+            ex.opt<bool>("no-continuation", false, "high order: end shell-traced paths at the bowl's boundary");
+        ex.checkpointable();
+        ex.ready();
+        const bool full = ex.full();
+        const std::uint64_t seed = ex.seed();
         if (n_grains < 100 || n_grains > 2000000)
             throw gl_examples::cli_error("--grains = " + std::to_string(n_grains) + " must be in [100, 2000000]");
         if (presets.empty()) throw gl_examples::cli_error("--presets must name at least one preset");
@@ -280,17 +272,17 @@ int main(int argc, char** argv) {
             throw gl_examples::cli_error("--table-albedo = " + std::to_string(table_albedo) + " must be in [0, 1)");
         if (!(switch_depth >= 0 && switch_depth < 1e6))
             throw gl_examples::cli_error("--switch-depth = " + std::to_string(switch_depth) + " must be in [0, 1e6)");
-        const std::filesystem::path out = cli.out_dir("out/moon07_fig13_grains");
+        const std::filesystem::path out = ex.out();
         const auto wall0 = std::chrono::steady_clock::now();
 
         // --- the aggregate: RSA bounding spheres (R = 1), grains from the presets, the bowl ---
-        std::vector<gl::GrainExemplar> ex;
+        std::vector<gl::GrainExemplar> exemplars;
         std::vector<double> weights;
         for (const std::string& name : presets) {
             const gl::GrainPreset p = gl::grain_preset(name);  // throws naming the valid presets
             if (p.material.kind != gl::GrainMaterialKind::dielectric)
                 throw gl_examples::cli_error("--presets: " + name + " is not a lossless dielectric preset");
-            ex.push_back(gl::GrainExemplar::from_preset(p, level));
+            exemplars.push_back(gl::GrainExemplar::from_preset(p, level));
             weights.push_back(1.0);
         }
         gl::Rng prng = gl::Rng::from_key(seed, 0xF13u);
@@ -303,7 +295,7 @@ int main(int argc, char** argv) {
         const double Rb = std::cbrt(double(n_grains) / (0.3 * 0.5));  // N = f (2/3 pi Rb^3) / (4/3 pi)
         const double L = 2 * Rb;
         const BowlVolume bowl{Vec3d(Rb, Rb, Rb + R), Rb};
-        const Agg agg(tile, gl::VoxelizedBoundary<BowlShape>(BowlShape{bowl}, tile.side()), ex, weights, seed);
+        const Agg agg(tile, gl::VoxelizedBoundary<BowlShape>(BowlShape{bowl}, tile.side()), exemplars, weights, seed);
         const std::uint64_t n_in = agg.grain_count();
         const double light_size = 0.3;
         GrainBowlScene scene;
@@ -314,8 +306,8 @@ int main(int argc, char** argv) {
                                   Vec3d(0, light_size * L, 0), Vec3d(light_size * L, 0, 0)),
             S1(0.9 * 0.12 * 0.12 / (light_size * light_size) * 4.0));
         scene.floor_albedo = table_albedo;
-        scene.continuation = !cli.has("no-continuation");
-        std::cerr << "moon07_fig13: " << n_in << " grains (" << cli.str("presets", "sugar,snow") << ", level " << level
+        scene.continuation = !no_continuation;
+        std::cerr << "moon07_fig13: " << n_in << " grains (" << presets_text << ", level " << level
                   << ") in a bowl of radius " << Rb << " R\n";
 
         // --- shell table from the same aggregate process over all space (cached) ---
@@ -336,12 +328,12 @@ int main(int argc, char** argv) {
         double nmf_error = -1;
         bool cached = false;
         const double b0 = cpu_seconds();
-        if (!cli.has("rebuild-table") && std::filesystem::exists(table_path)) {
+        if (!rebuild_table && std::filesystem::exists(table_path)) {
             table = gl::ShellTable::load(table_path);
             cached = true;
         } else {
             using EB = gl::EverywhereBoundary;
-            const gl::GranularAggregate<EB> bulk(tile, gl::VoxelizedBoundary<EB>({}, tile.side()), ex, weights, seed);
+            const gl::GranularAggregate<EB> bulk(tile, gl::VoxelizedBoundary<EB>({}, tile.side()), exemplars, weights, seed);
             const gl::GrainAggregateShellSource<EB> src(bulk, 20 * R);
             const gl::ShellSamples samples = gl::collect_shell_samples(src, radii, shell_paths, seed ^ 0x13u);
             gl::ShellBuildResult built = gl::build_shell_table(samples, bo);
@@ -374,13 +366,11 @@ int main(int argc, char** argv) {
             }
         if (n_mask < 16) throw std::runtime_error("the camera sees fewer than 16 bowl pixels");
 
-        RenderCheckpoints checkpoints{&cli, out, "moon07_fig13_grains", {}};
         const ShellPasses passes = render_shell_passes(
-            cam, spp_pt, spp_low, spp_high, B, seed, threads, "fig13",
+            ex, cam, spp_pt, spp_low, spp_high, B, "fig13",
             [&](const gl::Ray<double>& r, gl::Rng& rng, Mode m, gl::ShellTraceStats* s) {
                 return scene.radiance(r, rng, m, &tracer, s);
-            },
-            &checkpoints);
+            });
         const BatchImages &pt = passes.pt, &lo = passes.lo, &hi = passes.hi;
         const gl::ShellTraceStats& ts = passes.ts;
         const double high_samples = double(spp_high) * B * double(n_mask);
@@ -390,7 +380,7 @@ int main(int argc, char** argv) {
         gl_examples::Csv csv({"seconds_pt", "seconds_low", "seconds_high", "speedup_equal_error", "mean_pt", "mean_shells",
                               "rmse_pt", "rmse_shells", "bias_rel"});
         csv.row({pt.cpu, lo.cpu, hi.cpu, st.speedup, st.mean_pt, st.mean_sh, st.rmse_pt, st.rmse_sh, st.bias_rel});
-        csv.write(out / "moon07_fig13_grains.csv");
+        ex.csv("moon07_fig13_grains.csv", csv);
         std::cout << "Moon07 Fig. 13 (bowl of procedural grains instead of glass Buddhas), " << n_in << " grains, " << W
                   << "x" << H << ", " << B << " batches\n"
                   << "  path tracing (EPT): " << pt.cpu << " CPU s (" << spp_pt * B << " spp)   paper: no timing for Fig. 13\n"
@@ -403,7 +393,7 @@ int main(int argc, char** argv) {
                   << "  shell table: raw " << raw_bytes / 1024 << " KiB -> factored " << factored_bytes / 1024
                   << " KiB   paper: ~30 MB -> 250 KB\n";
         const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-        gl_examples::Json j;
+        gl_examples::Json j = ex.summary();
         j.num("seconds_pt", pt.cpu)
             .num("seconds_low", lo.cpu)
             .num("seconds_high", hi.cpu)
@@ -428,7 +418,7 @@ int main(int argc, char** argv) {
             .integer("min_scatter", min_scatter)
             .num("switch_depth", switch_depth)
             .integer("grains", (long long)n_in)
-            .integer("exemplars", (long long)ex.size())
+            .integer("exemplars", (long long)exemplars.size())
             .num("bowl_radius_R", Rb)
             .integer("bowl_pixels", (long long)n_mask)
             .num("shell_build_cpu_seconds", build_seconds)
@@ -437,8 +427,6 @@ int main(int argc, char** argv) {
             .num("shell_raw_bytes", raw_bytes)
             .num("shell_factored_bytes", factored_bytes)
             .num("wall_seconds", wall);
-        checkpoints.remove_all();
-        std::cout << j.str() << std::endl;
-        return 0;
-    });
+        return ex.finish(j);  // removes the checkpoints of the completed run
+        });
 }

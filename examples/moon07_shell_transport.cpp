@@ -28,9 +28,7 @@
 #include <iostream>
 #include <vector>
 
-#include "common/cli.hpp"
-#include "common/output.hpp"
-#include "common/progress.hpp"
+#include "common/harness.hpp"
 #include "grainlight/core/statistics.hpp"
 #include "grainlight/media/shell.hpp"
 #include "grainlight/packing/poisson.hpp"
@@ -83,28 +81,26 @@ struct ChainRecorder {
 }  // namespace
 
 int main(int argc, char** argv) {
-    return gl_examples::run_main("moon07_shell_transport", [&]() -> int {
-        gl_examples::Cli cli(argc, argv, "moon07_shell_transport",
-                             "Moon07 shell transport functions of glass spheres; shell stepping vs explicit path tracing");
-        cli.common_options("out/moon07_shell_transport")
-            .option("fraction", "packing fraction of the hard-sphere Poisson packing (<= 0.35)", "0.3")
-            .option("eta", "relative index of the spheres", "1.5")
-            .option("paths", "preprocessing paths (default 40000 quick, 500000 full = the paper's count)")
-            .option("rank", "NMF rank of the stored table (paper: 4-6)", "5");
-        cli.finish();
-        const bool full = cli.full_quality();
-        const auto out = cli.out_dir("out/moon07_shell_transport");
-        const int threads = cli.threads();
-        const double fraction = cli.num("fraction", 0.3);
-        const double eta = cli.num("eta", 1.5);
-        const auto n_paths = std::uint64_t(cli.integer("paths", full ? 500000 : 40000));
-        const int rank = int(cli.integer("rank", 5));
+    return gl_examples::run(
+        argc, argv, "moon07_shell_transport",
+        "Moon07 shell transport functions of glass spheres; shell stepping vs explicit path tracing",
+        "out/moon07_shell_transport", [&](gl_examples::Example& ex) -> int {
+        const double fraction =
+            ex.opt<double>("fraction", 0.3, "packing fraction of the hard-sphere Poisson packing (<= 0.35)");
+        const double eta = ex.opt<double>("eta", 1.5, "relative index of the spheres");
+        const auto n_paths =
+            ex.opt<std::uint64_t>("paths", 40000, 500000, "preprocessing paths (full = the paper's count)");
+        const int rank = ex.opt<int>("rank", 5, "NMF rank of the stored table (paper: 4-6)");
+        ex.ready();
+        const bool full = ex.full();
+        const auto out = ex.out();
+        const int threads = ex.threads();
         if (!(fraction > 0 && fraction <= gl::rsa_max_fraction))
             throw gl_examples::cli_error("--fraction must be in (0, 0.35]");
         if (!(eta > 0 && eta < 10)) throw gl_examples::cli_error("--eta must be in (0, 10)");
         if (n_paths < 1000 || n_paths > 100000000ull) throw gl_examples::cli_error("--paths must be in [1000, 1e8]");
         if (rank < 1 || rank > 64) throw gl_examples::cli_error("--rank must be in [1, 64]");
-        const std::uint64_t seed = cli.seed();
+        const std::uint64_t seed = ex.seed();
 
         // Medium: unit tile of 128 spheres; work in units of R.
         gl::Rng prng = gl::Rng::from_key(seed, 0x7ac);
@@ -135,7 +131,7 @@ int main(int argc, char** argv) {
             nmf_err.push_back(gl::nmf(built.density, k, bo.nmf_iterations, bo.seed).relative_error);
             nmf_csv.row({double(k), nmf_err.back()});
         }
-        nmf_csv.write(out / "moon07_shell_transport_nmf.csv");
+        ex.csv("moon07_shell_transport_nmf.csv", nmf_csv);
 
         // Fig. 8: marginal p_r(theta_1) per radius (per unit cos theta_1, scattered exits, times
         // p_scattered) and f_a(d) against the exponential with the same mean free path.
@@ -147,7 +143,7 @@ int main(int argc, char** argv) {
                 row.push_back(medium.exit_position_density(int(i), c) * 2 * gl::pi_v<double> * radii[i] * radii[i]);
             fig8.row(row);
         }
-        fig8.write(out / "moon07_shell_transport_fig8.csv");
+        ex.csv("moon07_shell_transport_fig8.csv", fig8);
         double mean_free = 0;  // integral of f_a = mean first free path from a typical point
         const std::size_t nfa = table.fa.size();
         for (std::size_t j = 0; j + 1 < nfa; ++j) mean_free += 0.5 * (table.fa[j] + table.fa[j + 1]) * table.fa_d_max / (nfa - 1);
@@ -156,7 +152,7 @@ int main(int argc, char** argv) {
             const double d = table.fa_d_max * double(j) / double(nfa - 1);
             fa_csv.row({d / R, table.fa[j], std::exp(-d / mean_free)});
         }
-        fa_csv.write(out / "moon07_shell_transport_fa.csv");
+        ex.csv("moon07_shell_transport_fa.csv", fa_csv);
 
         // --- Shell stepping vs explicit path tracing, r = 8 R ---
         const int shell = 3;
@@ -166,7 +162,7 @@ int main(int argc, char** argv) {
         std::vector<gl::Welford> msd_e(n_steps), msd_s(n_steps), cos_e(n_steps), cos_s(n_steps);
         std::vector<double> last_e, last_s;
         std::uint64_t explicit_events = 0;
-        gl_examples::ProgressBar bar("explicit paths", std::uint64_t(n_cmp));
+        auto bar = ex.progress("explicit paths", std::uint64_t(n_cmp));
         const double te0 = now_s();
         for (int p = 0; p < n_cmp; ++p) {
             gl::Rng rng = gl::Rng::from_key(seed, 0xe7, std::uint64_t(p));
@@ -233,7 +229,7 @@ int main(int argc, char** argv) {
                        msd_s[n].standard_error(), cos_e[n].mean(), cos_s[n].mean()});
             max_rel_msd = std::max(max_rel_msd, std::abs(msd_s[n].mean() / msd_e[n].mean() - 1));
         }
-        steps.write(out / "moon07_shell_transport_steps.csv");
+        ex.csv("moon07_shell_transport_steps.csv", steps);
         // Radial distribution of |X_n| after the last step (normalized histograms).
         const int nb = 30;
         const double rmax = r * n_steps / R;
@@ -243,36 +239,12 @@ int main(int argc, char** argv) {
         gl_examples::Csv radial({"radius_over_R", "pdf_explicit", "pdf_shells"});
         for (int b = 0; b < nb; ++b)
             radial.row({(b + 0.5) * rmax / nb, he.density(std::size_t(b)), hs.density(std::size_t(b))});
-        radial.write(out / "moon07_shell_transport_radial.csv");
+        ex.csv("moon07_shell_transport_radial.csv", radial);
 
-        gl_examples::plot_with_matplotlib(
-            out / "moon07_shell_transport.py",
-            "f8 = read_csv(r'''" + (out / "moon07_shell_transport_fig8.csv").string() + "''')\n"
-            "fa = read_csv(r'''" + (out / "moon07_shell_transport_fa.csv").string() + "''')\n"
-            "st = read_csv(r'''" + (out / "moon07_shell_transport_steps.csv").string() + "''')\n"
-            "ra = read_csv(r'''" + (out / "moon07_shell_transport_radial.csv").string() + "''')\n"
-            "nm = read_csv(r'''" + (out / "moon07_shell_transport_nmf.csv").string() + "''')\n"
-            "fig, ax = plt.subplots(2, 3, figsize=(14, 8))\n"
-            "th = np.degrees(np.arccos(f8['cos_theta1']))\n"
-            "for k in ['p_r2','p_r4','p_r6','p_r8','p_r10','p_r12']:\n"
-            "    ax[0,0].semilogy(th, f8[k], label='r = '+k[3:]+' R')\n"
-            "ax[0,0].set_xlabel('theta_1 (deg)'); ax[0,0].set_ylabel('p_r(cos theta_1), scattered exits'); ax[0,0].legend(fontsize=7)\n"
-            "ax[0,0].set_title('Fig. 8 top: exit position marginal')\n"
-            "ax[0,1].semilogy(fa['d_over_R'], fa['f_a'], 'k-', label='f_a(d) measured')\n"
-            "ax[0,1].semilogy(fa['d_over_R'], fa['exp_same_mean'], 'r--', label='exponential, same mean')\n"
-            "ax[0,1].set_xlabel('d / R'); ax[0,1].legend(); ax[0,1].set_title('Fig. 8 bottom: attenuation f_a')\n"
-            "ax[0,2].semilogy(nm['rank'], nm['relative_error'], 'o-'); ax[0,2].set_xlabel('NMF rank')\n"
-            "ax[0,2].set_ylabel('||V - WH|| / ||V||'); ax[0,2].set_title('NMF reconstruction error')\n"
-            "ax[1,0].errorbar(st['step'], st['msd_explicit'], yerr=np.array(st['msd_explicit_se'])*2, fmt='ko', label='explicit spheres')\n"
-            "ax[1,0].plot(st['step'], st['msd_shells'], 'r-', label='shell stepping')\n"
-            "ax[1,0].set_xlabel('steps (r = 8 R)'); ax[1,0].set_ylabel('<|x|^2> / R^2'); ax[1,0].legend()\n"
-            "ax[1,1].plot(st['step'], st['cos_explicit'], 'ko', label='explicit'); ax[1,1].plot(st['step'], st['cos_shells'], 'r-', label='shells')\n"
-            "ax[1,1].set_xlabel('steps'); ax[1,1].set_ylabel('<omega_n . omega_0>'); ax[1,1].legend()\n"
-            "ax[1,2].plot(ra['radius_over_R'], ra['pdf_explicit'], 'k.', label='explicit')\n"
-            "ax[1,2].plot(ra['radius_over_R'], ra['pdf_shells'], 'r-', label='shells')\n"
-            "ax[1,2].set_xlabel('|x_n| / R after the last step'); ax[1,2].set_ylabel('pdf'); ax[1,2].legend()\n"
-            "fig.tight_layout(); fig.savefig(png, dpi=100)\n",
-            out / "moon07_shell_transport.png");
+        ex.plot("moon07_shell_transport", out / "moon07_shell_transport_fig8.csv", out / "moon07_shell_transport.png",
+                {(out / "moon07_shell_transport_fa.csv").string(), (out / "moon07_shell_transport_steps.csv").string(),
+                 (out / "moon07_shell_transport_radial.csv").string(),
+                 (out / "moon07_shell_transport_nmf.csv").string()});
 
         // --- Fig. 6 / Sec. 4.3: direct illumination from a small light ---
         // A ball of the medium (radius 16 R) lit by a distant cone light (half-angle 3 deg about
@@ -349,7 +321,7 @@ int main(int argc, char** argv) {
         gl_examples::Csv di_csv({"estimator", "mean", "stderr", "seconds"});
         di_csv.row({0.0, di_hit.mean(), di_hit.standard_error(), th1 - th0});
         di_csv.row({1.0, di_nee.mean(), di_nee.standard_error(), th2 - th1});
-        di_csv.write(out / "moon07_shell_transport_direct.csv");
+        ex.csv("moon07_shell_transport_direct.csv", di_csv);
 
         const double raw_bytes = double(built.density.size()) * 4.0;  // float grid
         const double factored_bytes = double(table.W.size() + table.H.size()) * 4.0;
@@ -378,9 +350,8 @@ int main(int argc, char** argv) {
                   << "   [paper Sec. 4.3: path tracing must wait for rays to hit the source; shells give a smooth"
                      " estimate regardless of the light size]\n";
 
-        gl_examples::Json j;
-        j.str("example", "moon07_shell_transport")
-            .num("fraction", fraction)
+        gl_examples::Json j = ex.summary();
+        j.num("fraction", fraction)
             .num("eta", eta)
             .integer("paths", (long long)n_paths)
             .num("preprocess_seconds", t2 - t0)
@@ -398,9 +369,7 @@ int main(int argc, char** argv) {
             .num("direct_nee_se", di_nee.standard_error())
             .num("direct_efficiency_gain", eff_nee / eff_hit)
             .nums("p_unscattered", table.p_unscattered)
-            .integer("threads", threads)
             .str("png", (out / "moon07_shell_transport.png").string());
-        std::cout << j.str() << std::endl;
-        return 0;
-    });
+        return ex.finish(j);
+        });
 }
