@@ -32,9 +32,7 @@
 
 #include "common/checkpoint.hpp"
 #include "guo21_cornell_scene.hpp"
-#include "common/cli.hpp"
-#include "common/output.hpp"
-#include "common/progress.hpp"
+#include "common/harness.hpp"
 #include "grainlight/core/color.hpp"
 #include "grainlight/integrators/discrete_vpt.hpp"
 #include "grainlight/media/discrete_particles.hpp"
@@ -94,36 +92,32 @@ gl::Image combine_spectral(const std::vector<gl::Image>& per_lambda, std::vector
 }  // namespace
 
 int main(int argc, char** argv) {
-    return gl_examples::run_main("guo21_fig12_cornell", [&]() -> int {
-        gl_examples::Cli cli(argc, argv, "guo21_fig12_cornell",
-                             "Guo21 Fig. 12: 1e5 spheres of 1000 um in a Cornell box, EPT vs ours vs ours -FD");
-        cli.common_options("out/guo21_fig12_cornell")
-            .option("spp", "samples per pixel (default 32 quick, 512 full)")
-            .option("width", "image width = height (default 64 quick, 512 full)")
-            .option("count", "number of particles", "100000")
-            .option("rc-over-rp", "query radius r_c / r_p of the EPT comparison", "0.05")
-            .option("batches", "independent batches per render (variance, time to unit variance)", "8")
-            .option("paper-k", "1: also render ours -FD at the paper's k = 0.5 and 1; 0: skip", "1")
-            .option("spectral", "1: also render EPT, ours and ours -FD at 8 wavelengths (ice index of Warren & Brandt "
-                                "2008, coloured walls, CIE 1931 -> sRGB; spp / 8 per wavelength) (default 1 full, 0 quick)")
-            .checkpoint_options();
-        cli.finish();
-        const bool full = cli.full_quality();
-        const auto out = cli.out_dir("out/guo21_fig12_cornell");
-        const int threads = cli.threads();
-        const int width = int(cli.integer("width", full ? 512 : 64));
-        if (width < 8 || width > 8192) throw gl_examples::cli_error("--width must be in [8, 8192]");
-        const int spp = int(cli.integer("spp", full ? 512 : 32));
-        if (spp < 1 || spp > 65536) throw gl_examples::cli_error("--spp must be in [1, 65536]");
-        const std::uint64_t count = cli.integer("count", 100000);
-        if (count < 1 || count > 100000000) throw gl_examples::cli_error("--count must be in [1, 1e8]");
-        const double rc_over_rp = cli.num("rc-over-rp", 0.05);
-        if (!(rc_over_rp > 0 && rc_over_rp <= 10)) throw gl_examples::cli_error("--rc-over-rp must be in (0, 10]");
+    return gl_examples::run(argc, argv, "guo21_fig12_cornell",
+                            "Guo21 Fig. 12: 1e5 spheres of 1000 um in a Cornell box, EPT vs ours vs ours -FD",
+                            "out/guo21_fig12_cornell", [&](gl_examples::Example& ex) -> int {
+        using gl_examples::cli_error;
+        const int width = ex.opt<int>("width", 64, 512, "image width = height");
+        const int spp = ex.opt<int>("spp", 32, 512, "samples per pixel");
+        const auto count = ex.opt<std::uint64_t>("count", 100000, "number of particles");
+        const double rc_over_rp = ex.opt<double>("rc-over-rp", 0.05, "query radius r_c / r_p of the EPT comparison");
+        const int batches = ex.opt<int>("batches", 8, "independent batches per render (variance, time to unit variance)");
+        const bool paper_k = ex.opt<int>("paper-k", 1, "1: also render ours -FD at the paper's k = 0.5 and 1; 0: skip") != 0;
+        const bool spectral =
+            ex.opt<int>("spectral", 0, 1,
+                        "1: also render EPT, ours and ours -FD at 8 wavelengths (ice index of Warren & Brandt 2008, coloured "
+                        "walls, CIE 1931 -> sRGB; spp / 8 per wavelength)") != 0;
+        ex.checkpointable();
+        ex.ready();
+        const auto& out = ex.out();
+        const int threads = ex.threads();
+        if (width < 8 || width > 8192) throw cli_error("--width = " + std::to_string(width) + " must be in [8, 8192]");
+        if (spp < 1 || spp > 65536) throw cli_error("--spp = " + std::to_string(spp) + " must be in [1, 65536]");
+        if (count < 1 || count > 100000000) throw cli_error("--count = " + std::to_string(count) + " must be in [1, 1e8]");
+        if (!(rc_over_rp > 0 && rc_over_rp <= 10))
+            throw cli_error("--rc-over-rp = " + ex.given_text("rc-over-rp") + " must be in (0, 10]");
         const double r_p = kRadiusUm * 1e-6;
-        const int batches = int(cli.integer("batches", 8));
-        if (batches < 2 || batches > 64 || batches > spp) throw gl_examples::cli_error("--batches must be in [2, min(64, spp)]");
-        const bool paper_k = cli.integer("paper-k", 1) != 0;
-        const bool spectral = cli.integer("spectral", full ? 1 : 0) != 0;
+        if (batches < 2 || batches > 64 || batches > spp)
+            throw cli_error("--batches = " + std::to_string(batches) + " must be in [2, min(64, spp)]");
 
         const gl::PinholeCamera<float> camera = guo21_cornell::camera(width);
         const double z_med = 2.3 - kHi.z;  // nearest depth of the medium
@@ -133,20 +127,21 @@ int main(int argc, char** argv) {
 
         const std::vector<char> mask = guo21_cornell::cloud_mask(camera, width);
         auto cloud = std::make_shared<gl::ParticleCloud>(gl::ParticleCloud::generate(
-            gl::BoxBoundary(kLo, kHi), count, {gl::cloud_species(gl::MonodispersePsd(kRadiusUm))}, cli.seed() * 31 + 7, 1e6));
+            gl::BoxBoundary(kLo, kHi), count, {gl::cloud_species(gl::MonodispersePsd(kRadiusUm))}, ex.seed() * 31 + 7, 1e6));
         gl::ParticleModel model;
         model.particle_index = {1.31, 0.0};
 
         gl::RenderOptions opt;
         opt.spp = spp;
         opt.threads = threads;
-        opt.seed = cli.seed();
+        opt.seed = ex.seed();
         opt.vpt.max_depth = 256;
         // --checkpoint SECONDS / --resume: one checkpoint per render (kept when it finishes, so a
-        // resumed run skips the renders already done; all removed at the end). A resumed run's
+        // resumed run skips the renders already done; ex.finish removes them). A resumed run's
         // timings count only the rows it rendered itself.
-        gl_examples::RenderCheckpoints checkpoints{&cli, out, "guo21_fig12_cornell", {}};
-        const std::function<gl::CheckpointOptions(const std::string&)> checkpoint = std::ref(checkpoints);
+        const std::function<gl::CheckpointOptions(const std::string&)> checkpoint = [&](const std::string& label) {
+            return gl_examples::checkpoint_for(ex, label);
+        };
 
         std::printf("Guo21 Fig. 12 (Sec. 6.1): %llu ice spheres r = %.0f um in a 1 m Cornell box, %dx%d, %d spp\n",
                     (unsigned long long)count, kRadiusUm, width, width, spp);
@@ -316,9 +311,8 @@ int main(int argc, char** argv) {
         std::printf("  paper: -FD is close to the full model; the FD-only image shows subtle differences (Fraunhofer's\n"
                     "  lobe at 1000 um is ~0.03 deg wide: r^2/lambda = 1.8 m, the box is in the particles' near field)\n");
 
-        gl_examples::Json j;
-        j.str("example", "guo21_fig12_cornell")
-            .integer("width", width)
+        gl_examples::Json j = ex.summary();
+        j.integer("width", width)
             .integer("spp", spp)
             .integer("count", (long long)count)
             .num("radius_um", kRadiusUm)
@@ -366,8 +360,6 @@ int main(int argc, char** argv) {
                 .num("rel_diff_discrete_spectral", sp_ours.mean_luminance / sp_ept.mean_luminance - 1)
                 .num("seconds_ept_spectral", sp_ept.seconds)
                 .num("seconds_discrete_spectral", sp_ours.seconds);
-        checkpoints.remove_all();  // the run is complete: its checkpoints are not needed
-        std::cout << j.str() << std::endl;
-        return 0;
+        return ex.finish(j);  // the run is complete: its checkpoints are removed
     });
 }

@@ -56,30 +56,6 @@ inline grainlight::CheckpointOptions checkpoint_file(const Cli& cli, const std::
     return c;
 }
 
-/// One checkpoint per render_image call of an example that uses the Cli directly (checkpoint_file
-/// per label), all removed by remove_all() at the end of a completed run. A resumed run's timings
-/// count only the rows it rendered itself. Harness examples use checkpoint_for instead.
-struct RenderCheckpoints {
-    const Cli* cli = nullptr;
-    std::filesystem::path out;
-    std::string example;
-    std::vector<std::filesystem::path> files;
-
-    /// The checkpoint options of the render labelled `label` (disabled without the options).
-    grainlight::CheckpointOptions operator()(const std::string& label) {
-        auto c = checkpoint_file(*cli, out, example, label);
-        if (!c.path.empty()) files.push_back(c.path);
-        return c;
-    }
-    /// The run is complete: remove its checkpoints.
-    void remove_all() const {
-        for (const auto& p : files) {
-            std::error_code ec;
-            std::filesystem::remove(p, ec);
-        }
-    }
-};
-
 /// The checkpoint of one render of a harness example: DIR/<example>.<stem>[.rankRofK].checkpoint
 /// in --out (disabled without --checkpoint / --resume). The file is kept when the render finishes
 /// (so a resumed multi-render run skips the renders already done) and removed by ex.finish().

@@ -106,39 +106,4 @@ private:
     std::vector<std::string> rows_;
 };
 
-/// Run a matplotlib script with Debian's python (writes a PNG). Returns false (with a note on
-/// stderr) when matplotlib is unavailable: the CSV is always written, the plot is a bonus.
-/// The script gets `csv` (path), `png` (path) and `out` (directory) predefined, plus numpy/plt.
-inline bool plot_with_matplotlib(const std::filesystem::path& script_path, const std::string& body,
-                                 const std::filesystem::path& png) {
-    std::string py = "import matplotlib\nmatplotlib.use('Agg')\nimport matplotlib.pyplot as plt\nimport numpy as np\n"
-                     "import csv as _csv\n"
-                     "def read_csv(p):\n"
-                     "    with open(p) as f:\n"
-                     "        r = list(_csv.reader(f))\n"
-                     "    h = r[0]; cols = {k: [] for k in h}\n"
-                     "    for row in r[1:]:\n"
-                     "        for k, v in zip(h, row):\n"
-                     "            try: cols[k].append(float(v))\n"
-                     "            except ValueError: cols[k].append(v)\n"
-                     "    return cols\n"
-                     "png = r'''" + png.string() + "'''\n" + body + "\n";
-    write_text_atomic(script_path, py);
-    const char* python = std::getenv("GRAINLIGHT_PYTHON");
-    const std::string interp = python ? python : "/usr/bin/python3";
-    const std::string cmd = interp + " '" + script_path.string() + "' 2>&1";
-    FILE* p = popen(cmd.c_str(), "r");
-    if (!p) return false;
-    std::string output;
-    char buf[256];
-    while (fgets(buf, sizeof buf, p)) output += buf;
-    const int rc = pclose(p);
-    if (rc != 0) {
-        std::cerr << "note: plot " << png << " not drawn (" << interp << " + matplotlib): " << output.substr(0, 300)
-                  << "\n";
-        return false;
-    }
-    return true;
-}
-
 }  // namespace gl_examples
