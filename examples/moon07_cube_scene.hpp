@@ -451,6 +451,70 @@ struct VolumeScene {
 
 /// The Moon07 cube scene (moon07_fig9_cube_shadow, moon07_fig11_spotlight).
 using CubeScene = VolumeScene<gl::BoxDistance>;
+/// The switch-rule, shell-table and high-order options the Moon07 scene examples (Figs. 9, 11, 12)
+/// share: declared on the Example in one place (`volume` names the volume in the help texts),
+/// checked by check() after ready().
+struct ShellSceneOptions {
+    int spp_low = 16;                 ///< low-order samples per pixel per batch
+    int spp_high = 8;                 ///< high-order (shell) samples per pixel per batch
+    int min_scatter = 3;              ///< switch rule: explicit interface events before shells
+    double switch_depth = 2.0;        ///< switch rule: depth below the surface to switch (R)
+    std::uint64_t shell_paths = 0;    ///< paths of the shell precomputation
+    int n_radii = 0;                  ///< number of shell radii
+    double shell_r0 = 2.0;            ///< smallest shell radius r_0 (R)
+    bool rebuild_table = false;       ///< ignore a cached shell table in --out
+    bool no_nee = false;              ///< high order without Fig. 6's shadow rays
+    std::string exit_rule = "table";  ///< radial (Moon07) or table
+    bool hand_back = false;           ///< explicit tracing within r_0 of the faces
+
+    static ShellSceneOptions declare(gl_examples::Example& ex, const std::string& volume) {
+        ShellSceneOptions o;
+        o.spp_low = ex.opt<int>("spp-low", 16, "low-order samples per pixel per batch");
+        o.spp_high = ex.opt<int>("spp-high", 8, "high-order (shell) samples per pixel per batch");
+        o.min_scatter = ex.opt<int>("min-scatter", 3, "switch rule: explicit interface events before shells");
+        o.switch_depth = ex.opt<double>(
+            "switch-depth", 2.0, "switch rule: depth below the " + volume + " surface to switch (R; default r_0 = 2)");
+        o.shell_paths = ex.opt<std::uint64_t>("shell-paths", 20000, 500000, "paths of the shell precomputation");
+        o.n_radii = ex.opt<int>("shell-radii", 8, 12, "number of shell radii (paper: 12-16)");
+        o.shell_r0 = ex.opt<double>("shell-r0", 2.0, "smallest shell radius r_0 (R; the correlation length)");
+        o.rebuild_table = ex.opt<bool>("rebuild-table", false, "ignore a cached shell table in --out");
+        o.no_nee = ex.opt<bool>("no-nee", false, "high order without Fig. 6's shadow rays (count escapes that hit the light)");
+        o.exit_rule = ex.opt<std::string>(
+            "exit-rule", "table",
+            "exits outside the " + volume + ": radial (Moon07: along y - x) or table (along the sampled T_r direction)");
+        o.hand_back = ex.opt<bool>(
+            "hand-back", false,
+            "high order: shells only where they fit, explicit tracing within r_0 of the faces (no exit rule, no shadow rays)");
+        return o;
+    }
+    /// The tracer's switch rule, shadow rays and exit rule from these options (R: sphere radius;
+    /// with hand_back the explicit zone is r_0 deep and the scene must trace to the boundary).
+    [[nodiscard]] gl::ShellTracerOptions tracer_options(double R) const {
+        gl::ShellTracerOptions to;
+        to.min_scatter = min_scatter;
+        to.switch_depth = switch_depth;
+        to.nee = !no_nee;
+        to.exit_rule = exit_rule == "table" ? gl::ShellExitRule::table : gl::ShellExitRule::radial;
+        if (hand_back) to.hand_back_depth = shell_r0 * R;
+        return to;
+    }
+    /// Throws cli_error naming the option, the value and the valid range.
+    void check() const {
+        using gl_examples::cli_error;
+        if (spp_low < 1 || spp_high < 1)
+            throw cli_error("--spp-low = " + std::to_string(spp_low) + ", --spp-high = " + std::to_string(spp_high) +
+                            " must be >= 1");
+        if (n_radii < 2 || n_radii > 64) throw cli_error("--shell-radii = " + std::to_string(n_radii) + " must be in [2, 64]");
+        if (exit_rule != "radial" && exit_rule != "table")
+            throw cli_error("--exit-rule = " + exit_rule + " must be radial or table");
+        if (shell_paths < 1000) throw cli_error("--shell-paths = " + std::to_string(shell_paths) + " must be >= 1000");
+        if (!(shell_r0 > 0 && shell_r0 < 1e6))
+            throw cli_error("--shell-r0 = " + std::to_string(shell_r0) + " must be in (0, 1e6)");
+        if (!(switch_depth >= 0 && switch_depth < 1e6))
+            throw cli_error("--switch-depth = " + std::to_string(switch_depth) + " must be in [0, 1e6)");
+    }
+};
+
 
 /// Per-pixel batch statistics of B renders.
 struct BatchImages {

@@ -32,34 +32,18 @@ int main(int argc, char** argv) {
         const int W = ex.opt<int>("width", 128, 512, "image width (height = 3/4 width)");
         const int H = std::max(1, W * 3 / 4);
         const int spp_pt = ex.opt<int>("spp-pt", 48, "path-tracing samples per pixel per batch");
-        const int spp_low = ex.opt<int>("spp-low", 16, "low-order samples per pixel per batch");
-        const int spp_high = ex.opt<int>("spp-high", 8, "high-order (shell) samples per pixel per batch");
+        const ShellSceneOptions so = ShellSceneOptions::declare(ex, "cube");
         const double light_size = ex.opt<double>("light-size", 0.05, "side of the square spot emitter / L");
         const double spot_angle = ex.opt<double>("spot-angle", 13.0, "half-angle of the spot cone (deg, (0, 60])");
         const int B = ex.opt<int>("batches", 8, "independent batches per image (>= 4)");
-        const int min_scatter = ex.opt<int>("min-scatter", 3, "switch rule: explicit interface events before shells");
-        const double switch_depth = ex.opt<double>(
-            "switch-depth", 2.0, "switch rule: depth below the cube surface to switch (R; default r_0 = 2)");
-        const std::uint64_t shell_paths =
-            ex.opt<std::uint64_t>("shell-paths", 20000, 500000, "paths of the shell precomputation");
-        const int n_radii = ex.opt<int>("shell-radii", 8, 12, "number of shell radii (paper: 12-16)");
-        const double shell_r0 = ex.opt<double>("shell-r0", 2.0, "smallest shell radius r_0 (R; the correlation length)");
-        const bool rebuild_table = ex.opt<bool>("rebuild-table", false, "ignore a cached shell table in --out");
         (void)ex.opt<bool>("cut-spheres", true,
                            "a cube cut out of the periodic packing (flat glass faces; the default)");
         const bool whole_spheres = ex.opt<bool>(
             "whole-spheres", false,
             "whole spheres only, centres >= R inside (a sphere-free skin the shells do not describe: +12 % bias at L = 59 R)");
-        const bool no_nee =
-            ex.opt<bool>("no-nee", false, "high order without Fig. 6's shadow rays (count escapes that hit the light)");
-        const std::string exit_rule = ex.opt<std::string>(
-            "exit-rule", "table",
-            "exits outside the cube: radial (Moon07: along y - x) or table (along the sampled T_r direction)");
-        const bool hand_back = ex.opt<bool>(
-            "hand-back", false,
-            "high order: shells only where they fit, explicit tracing within r_0 of the faces (no exit rule, no shadow rays)");
         ex.checkpointable();
         ex.ready();
+        so.check();
         const bool full = ex.full();
         const std::uint64_t seed = ex.seed();
         if (!(spot_angle > 0 && spot_angle <= 60))
@@ -71,13 +55,7 @@ int main(int argc, char** argv) {
             throw gl_examples::cli_error("--fraction = " + std::to_string(fraction) + " must be in (0, 0.35]");
         if (W < 8 || W > 8192) throw gl_examples::cli_error("--width = " + std::to_string(W) + " must be in [8, 8192]");
         if (B < 4) throw gl_examples::cli_error("--batches = " + std::to_string(B) + " must be >= 4");
-        if (spp_pt < 1 || spp_low < 1 || spp_high < 1) throw gl_examples::cli_error("--spp-* must be >= 1");
-        if (n_radii < 2 || n_radii > 64) throw gl_examples::cli_error("--shell-radii must be in [2, 64]");
-        if (shell_paths < 1000) throw gl_examples::cli_error("--shell-paths must be >= 1000");
-        if (!(shell_r0 > 0 && shell_r0 < 1e6))
-            throw gl_examples::cli_error("--shell-r0 = " + std::to_string(shell_r0) + " must be in (0, 1e6)");
-        if (!(switch_depth >= 0 && switch_depth < 1e6))
-            throw gl_examples::cli_error("--switch-depth = " + std::to_string(switch_depth) + " must be in [0, 1e6)");
+        if (spp_pt < 1) throw gl_examples::cli_error("--spp-pt = " + std::to_string(spp_pt) + " must be >= 1");
         const std::filesystem::path out = ex.out();
         const auto wall0 = std::chrono::steady_clock::now();
 
@@ -105,29 +83,29 @@ int main(int argc, char** argv) {
                   << ")\n";
 
         // --- shell table from the same random process (cached) ---
-        std::vector<double> radii(static_cast<std::size_t>(n_radii), 0.0);
-        const double r0 = shell_r0 * R, r_max = 0.45 * L;
-        for (int i = 0; i < n_radii; ++i) radii[std::size_t(i)] = r0 + (r_max - r0) * double(i) / double(n_radii - 1);
+        std::vector<double> radii(static_cast<std::size_t>(so.n_radii), 0.0);
+        const double r0 = so.shell_r0 * R, r_max = 0.45 * L;
+        for (int i = 0; i < so.n_radii; ++i) radii[std::size_t(i)] = r0 + (r_max - r0) * double(i) / double(so.n_radii - 1);
         gl::ShellBuildOptions bo;
         bo.n_c = full ? 50 : 24;
         bo.n_u = full ? 50 : 16;
         bo.n_v = full ? 25 : 16;
         bo.rank = 5;
         const std::string key = std::to_string(n_spheres) + "_" + std::to_string(int(fraction * 1000)) + "_" +
-                                std::to_string(shell_paths) + "_" + std::to_string(n_radii) + "_" +
+                                std::to_string(so.shell_paths) + "_" + std::to_string(so.n_radii) + "_" +
                                 std::to_string(bo.n_c) + "x" + std::to_string(bo.n_u) + "x" + std::to_string(bo.n_v) +
-                                "_r" + std::to_string(int(shell_r0 * 100)) + "_s" + std::to_string(seed);
+                                "_r" + std::to_string(int(so.shell_r0 * 100)) + "_s" + std::to_string(seed);
         const std::filesystem::path table_path = out / ("moon07_fig9_" + key + ".shel");
         gl::ShellTable table;
         double build_seconds = 0, nmf_error = -1;
         bool cached = false;
         const double b0 = cpu_seconds();
-        if (!rebuild_table && std::filesystem::exists(table_path)) {
+        if (!so.rebuild_table && std::filesystem::exists(table_path)) {
             table = gl::ShellTable::load(table_path);
             cached = true;
         } else {
             const gl::SpherePackingShellSource src(rsa, 1.5, 0.0, 20 * R);
-            const gl::ShellSamples samples = gl::collect_shell_samples(src, radii, shell_paths, seed ^ 0x9u);
+            const gl::ShellSamples samples = gl::collect_shell_samples(src, radii, so.shell_paths, seed ^ 0x9u);
             gl::ShellBuildResult built = gl::build_shell_table(samples, bo);
             nmf_error = built.nmf_relative_error;
             table = std::move(built.table);
@@ -140,17 +118,8 @@ int main(int argc, char** argv) {
                   << " CPU s), " << table.n_shells() << " radii " << radii.front() << ".." << radii.back()
                   << " R, raw " << raw_bytes / 1024 << " KiB -> factored " << factored_bytes / 1024 << " KiB\n";
 
-        gl::ShellTracerOptions to;
-        to.min_scatter = min_scatter;
-        to.switch_depth = switch_depth;
-        to.nee = !no_nee;
-        if (exit_rule != "radial" && exit_rule != "table")
-            throw gl_examples::cli_error("--exit-rule = " + exit_rule + " must be radial or table");
-        to.exit_rule = exit_rule == "table" ? gl::ShellExitRule::table : gl::ShellExitRule::radial;
-        if (hand_back) {
-            to.hand_back_depth = shell_r0 * R;
-            scene.hand_back = true;
-        }
+        const gl::ShellTracerOptions to = so.tracer_options(R);
+        scene.hand_back = so.hand_back;
         const gl::ShellTracer<S1, gl::BoxDistance> tracer(table, scene.cube, to);
 
         // --- camera; pixels that see the cube ---
@@ -186,13 +155,13 @@ int main(int argc, char** argv) {
         // finishes so a resumed run skips it, all removed at the end of a completed run; the shell
         // passes' step tallies count only the rows rendered by the resumed run) ---
         const ShellPasses passes = render_shell_passes(
-            ex, cam, spp_pt, spp_low, spp_high, B, "fig11",
+            ex, cam, spp_pt, so.spp_low, so.spp_high, B, "fig11",
             [&](const gl::Ray<double>& r, gl::Rng& rng, Mode m, gl::ShellTraceStats* s) {
                 return scene.radiance(r, rng, m, &tracer, nullptr, s);
             });
         const BatchImages &pt = passes.pt, &lo = passes.lo, &hi = passes.hi;
         const gl::ShellTraceStats& ts = passes.ts;
-        const double high_samples = double(spp_high) * B * double(n_mask);
+        const double high_samples = double(so.spp_high) * B * double(n_mask);
 
         // --- statistics over the cube pixels (compare_shells_to_pt, moon07_cube_scene.hpp) ---
         const ShellVsPt st = compare_shells_to_pt(pt, lo, hi, mask);
@@ -225,8 +194,8 @@ int main(int argc, char** argv) {
         std::cout << "Moon07 Fig. 11 (cube of glass spheres under a spotlight), " << kept.size() << " spheres, " << W << "x"
                   << H << ", " << B << " batches\n"
                   << "  path tracing: " << pt.cpu << " CPU s (" << spp_pt * B << " spp)   paper: 28.1 h\n"
-                  << "  low order:    " << lo.cpu << " CPU s (" << spp_low * B << " spp)   paper: 0.78 h\n"
-                  << "  high order:   " << hi.cpu << " CPU s (" << spp_high * B << " spp)   paper: 0.27 h\n"
+                  << "  low order:    " << lo.cpu << " CPU s (" << so.spp_low * B << " spp)   paper: 0.78 h\n"
+                  << "  high order:   " << hi.cpu << " CPU s (" << so.spp_high * B << " spp)   paper: 0.27 h\n"
                   << "  mean over the cube: PT " << mean_pt << ", shells " << mean_sh << " (low " << sum_lo / nm
                   << " + high " << sum_hi / nm << "), bias " << 100 * bias_rel << " +- " << 100 * bias_rel_se
                   << " %\n"
@@ -265,7 +234,7 @@ int main(int argc, char** argv) {
             .boolean("cut_spheres", scene.cut)
             .boolean("exit_rule_table", to.exit_rule == gl::ShellExitRule::table)
             .boolean("hand_back", scene.hand_back)
-            .integer("min_scatter", min_scatter)
+            .integer("min_scatter", so.min_scatter)
             .num("switch_depth", to.switch_depth)
             .integer("spheres", (long long)kept.size())
             .num("cube_side_R", L)
