@@ -56,6 +56,26 @@ constexpr int kComp = 5;  // single, double, multiple, bounced, total
 inline const char* const kCompName[kComp] = {"single", "double", "multiple", "bounced", "total"};
 constexpr int kBatches = 8;
 
+/// The sweeps' shared argument checks (cli_error naming the option, the value and the range).
+inline void check_render_args(int rays, int width, double radius_mfp) {
+    using gl_examples::cli_error;
+    if (rays < 1 || rays > 1024) throw cli_error("--rays = " + std::to_string(rays) + " must be in [1, 1024]");
+    if (width < 4 || width > 2048) throw cli_error("--width = " + std::to_string(width) + " must be in [4, 2048]");
+    if (!(radius_mfp > 0.5 && radius_mfp <= 200))
+        throw cli_error("--radius-mfp = " + std::to_string(radius_mfp) + " must be in (0.5, 200]");
+}
+/// --vpt-spp: >= 16 and a multiple of the batch count.
+inline void check_vpt_spp(int vpt_spp) {
+    if (vpt_spp < 16 || vpt_spp % kBatches != 0)
+        throw gl_examples::cli_error("--vpt-spp = " + std::to_string(vpt_spp) + " must be >= 16 and a multiple of " +
+                                     std::to_string(kBatches));
+}
+/// --surface-samples in [16, 1e7].
+inline void check_surface_samples(int n) {
+    if (n < 16 || n > 10000000)
+        throw gl_examples::cli_error("--surface-samples = " + std::to_string(n) + " must be in [16, 1e7]");
+}
+
 /// Process CPU seconds (all threads).
 inline double cpu_seconds() {
     timespec ts{};

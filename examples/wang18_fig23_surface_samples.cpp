@@ -30,11 +30,8 @@ int main(int argc, char** argv) {
             const int W = ex.opt<int>("width", 20, 64, "image width = height in pixels");
             const double R_opt = ex.opt<double>("radius-mfp", 20.0, "sphere radius in green mean free paths");
             ex.ready();
-            if (vpt_spp < 16 || vpt_spp % wang18::kBatches != 0)
-                throw gl_examples::cli_error("--vpt-spp must be >= 16 and a multiple of 8");
-            if (rays < 1 || rays > 1024) throw gl_examples::cli_error("--rays must be in [1, 1024]");
-            if (W < 4 || W > 2048) throw gl_examples::cli_error("--width must be in [4, 2048]");
-            if (!(R_opt > 0.5 && R_opt <= 200)) throw gl_examples::cli_error("--radius-mfp must be in (0.5, 200]");
+            wang18::check_vpt_spp(vpt_spp);
+            wang18::check_render_args(rays, W, R_opt);
             if (counts.empty()) throw gl_examples::cli_error("--counts needs at least one value");
             for (double n : counts)
                 if (!(n >= 16 && n <= 1e7)) throw gl_examples::cli_error("--counts values must be in [16, 1e7]");

@@ -30,12 +30,9 @@ int main(int argc, char** argv) {
             const int W = ex.opt<int>("width", 16, 64, "image width = height in pixels");
             const double R_opt = ex.opt<double>("radius-mfp", 20.0, "sphere radius in green mean free paths");
             ex.ready();
-            if (vpt_spp < 16 || vpt_spp % wang18::kBatches != 0)
-                throw gl_examples::cli_error("--vpt-spp must be >= 16 and a multiple of 8");
-            if (n_surface < 16 || n_surface > 10000000) throw gl_examples::cli_error("--surface-samples must be in [16, 1e7]");
-            if (rays < 1 || rays > 1024) throw gl_examples::cli_error("--rays must be in [1, 1024]");
-            if (W < 4 || W > 2048) throw gl_examples::cli_error("--width must be in [4, 2048]");
-            if (!(R_opt > 0.5 && R_opt <= 200)) throw gl_examples::cli_error("--radius-mfp must be in (0.5, 200]");
+            wang18::check_vpt_spp(vpt_spp);
+            wang18::check_surface_samples(n_surface);
+            wang18::check_render_args(rays, W, R_opt);
             if (eps.empty()) throw gl_examples::cli_error("--eps needs at least one value");
             for (double e : eps)
                 if (!(e > 0 && e <= 10)) throw gl_examples::cli_error("--eps values must be in (0, 10]");
