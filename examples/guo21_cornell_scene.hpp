@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "common/progress.hpp"
+#include "grainlight/integrators/discrete_vpt.hpp"
 #include "grainlight/integrators/render.hpp"
 #include "grainlight/scene/camera.hpp"
 #include "grainlight/scene/film.hpp"
@@ -151,6 +152,17 @@ Run render_batches(int batches, const gl::RenderOptions& base, const std::vector
     for (double m : means) vv += (m - mm) * (m - mm);
     r.mean_se = std::sqrt(vv / (batches - 1) / batches);
     return r;
+}
+
+/// render_batches of the discrete-medium VPT (integrators/discrete_vpt.hpp) of `sc` through `camera`.
+template <class SceneT, class Camera>
+Run render_scene_batches(int batches, const gl::RenderOptions& base, const std::vector<char>& mask, const std::string& label,
+                         int rows, const SceneT& sc, const Camera& camera,
+                         const std::function<gl::CheckpointOptions(const std::string&)>& checkpoint = {}) {
+    return render_batches(
+        batches, base, mask, label, rows,
+        [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_discrete_vpt(sc, camera, o, prog).image(); },
+        checkpoint);
 }
 
 /// Mean over the pixels whose centre ray passes through the cloud's box and does not see the

@@ -31,6 +31,13 @@ using S = gl::Spectrum<1, float>;
 constexpr double kSide = 1.0;
 /// Cube volume [m^3].
 constexpr double kVolume = kSide * kSide * kSide;
+/// The per-pixel mean of two equally weighted renders (the two seeded halves of a render).
+inline gl::Image average(const gl::Image& a, const gl::Image& b) {
+    gl::Image m = a;
+    for (std::size_t i = 0; i < m.rgb.size(); ++i) m.rgb[i] = 0.5f * (a.rgb[i] + b.rgb[i]);
+    return m;
+}
+
 
 /// The cube's domain for ParticleCloud::generate.
 inline gl::BoxBoundary cube_boundary() { return gl::BoxBoundary(gl::Vec3d(-0.5, 0.0, -0.5), gl::Vec3d(0.5, 1.0, 0.5)); }

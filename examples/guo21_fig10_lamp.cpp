@@ -134,9 +134,7 @@ int main(int argc, char** argv) {
                     using M = gl::ExplicitSphereMedium<float>;
                     gl::Scene<M> sc;
                     build_lamp(sc, sc.add_medium(M(grid, 1.31f)), 1.5 * r_max_m);
-                    ept = guo21_cornell::render_batches(batches, opt, mask, "EPT " + tag, height, [&](const gl::RenderOptions& o, auto&& prog) {
-                        return gl::render_discrete_vpt(sc, camera, o, prog).image();
-                    });
+                    ept = guo21_cornell::render_scene_batches(batches, opt, mask, "EPT " + tag, height, sc, camera);
                 }
                 double bytes_pp = 0, factor = 1, factor_d = 1;
                 auto ours = [&](bool diffraction, const std::string& label) {
@@ -160,10 +158,7 @@ int main(int argc, char** argv) {
                         }
                         (diffraction ? factor_d : factor) = sctf / sct;
                     }
-                    return guo21_cornell::render_batches(batches, opt, mask, label + " " + tag, height,
-                                                         [&](const gl::RenderOptions& o, auto&& prog) {
-                                                             return gl::render_discrete_vpt(sc, camera, o, prog).image();
-                                                         });
+                    return guo21_cornell::render_scene_batches(batches, opt, mask, label + " " + tag, height, sc, camera);
                 };
                 const auto f = ours(false, "ours -FD");
                 const auto o = ours(true, "ours");

@@ -54,7 +54,7 @@ using guo21_cornell::kHi;
 using guo21_cornell::kLo;
 using guo21_cornell::kRadiusUm;
 using guo21_cornell::masked_mean;
-using guo21_cornell::render_batches;
+using guo21_cornell::render_scene_batches;
 using guo21_cornell::Run;
 
 /// Spectral Cornell box (Guo21 Sec. 6: 8 wavelength samples): RGB colours of the walls (linear
@@ -153,10 +153,7 @@ int main(int argc, char** argv) {
             using M = gl::ExplicitSphereMedium<float>;
             gl::Scene<M> sc;
             build_cornell(sc, sc.add_medium(M(grid, 1.31f)), 1.5 * r_p);
-            ept = render_batches(
-                batches, opt, mask, "EPT", width,
-                [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_discrete_vpt(sc, camera, o, prog).image(); },
-                checkpoint);
+            ept = render_scene_batches(batches, opt, mask, "EPT", width, sc, camera, checkpoint);
         }
         // Ours with and without diffraction at r_c.
         double memory_mb = 0, bytes_pp = 0;
@@ -174,10 +171,7 @@ int main(int argc, char** argv) {
                 memory_mb = double(sc.medium(0).memory_bytes()) / (1024.0 * 1024.0);
                 bytes_pp = double(sc.medium(0).memory_bytes()) / double(count);
             }
-            return render_batches(
-                batches, opt, mask, label, width,
-                [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_discrete_vpt(sc, camera, o, prog).image(); },
-                checkpoint);
+            return render_scene_batches(batches, opt, mask, label, width, sc, camera, checkpoint);
         };
         const double r_c = rc_over_rp * r_p;
         const Run ours = render_ours(r_c, true, "ours", true);

@@ -36,15 +36,7 @@
 namespace gl = grainlight;
 using S = gl::Spectrum<1, float>;
 
-namespace {
-
-gl::Image average(const gl::Image& a, const gl::Image& b) {
-    gl::Image m = a;
-    for (std::size_t i = 0; i < m.rgb.size(); ++i) m.rgb[i] = 0.5f * (a.rgb[i] + b.rgb[i]);
-    return m;
-}
-
-}  // namespace
+using guo21_cube::average;
 
 int main(int argc, char** argv) {
     return gl_examples::run(

@@ -85,9 +85,7 @@ int main(int argc, char** argv) {
                     using M = gl::ExplicitSphereMedium<float>;
                     gl::Scene<M> sc;
                     guo21_cornell::build_cornell(sc, sc.add_medium(M(grid, 1.31f)), 1.5 * r_p);
-                    ept = guo21_cornell::render_batches(batches, opt, mask, "EPT " + tag, width, [&](const gl::RenderOptions& o, auto&& prog) {
-                        return gl::render_discrete_vpt(sc, camera, o, prog).image();
-                    });
+                    ept = guo21_cornell::render_scene_batches(batches, opt, mask, "EPT " + tag, width, sc, camera);
                 }
                 double bytes_pp = 0;
                 auto ours = [&](bool diffraction, const std::string& label) {
@@ -101,10 +99,7 @@ int main(int argc, char** argv) {
                     gl::Scene<M> sc;
                     guo21_cornell::build_cornell(sc, sc.add_medium(M(grid, {model}, ms)), 1.5 * r_p + r_c);
                     bytes_pp = double(sc.medium(0).memory_bytes()) / double(N);
-                    return guo21_cornell::render_batches(batches, opt, mask, label + " " + tag, width,
-                                                         [&](const gl::RenderOptions& o, auto&& prog) {
-                                                             return gl::render_discrete_vpt(sc, camera, o, prog).image();
-                                                         });
+                    return guo21_cornell::render_scene_batches(batches, opt, mask, label + " " + tag, width, sc, camera);
                 };
                 const auto o = ours(true, "ours");
                 const auto f = ours(false, "ours -FD");

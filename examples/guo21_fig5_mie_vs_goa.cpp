@@ -51,11 +51,7 @@ std::pair<gl::Image, gl::Image> render_pair(gl_examples::Example& ex, const gl::
     return {a, b};
 }
 
-gl::Image average(const gl::Image& a, const gl::Image& b) {
-    gl::Image m = a;
-    for (std::size_t i = 0; i < m.rgb.size(); ++i) m.rgb[i] = 0.5f * (a.rgb[i] + b.rgb[i]);
-    return m;
-}
+using guo21_cube::average;
 
 }  // namespace
 
