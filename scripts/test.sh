@@ -62,7 +62,10 @@ scripts/install_deps.sh
 
 phase "release: configure + build (g++)"
 echo "   ($BUILD, $JOBS jobs)" >&2
-cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release >/dev/null
+# Every part switched on explicitly: a build directory last configured by the main job
+# (scripts/run_examples.sh turns tests, benchmarks and the header check off) must not drop them.
+cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DGRAINLIGHT_BUILD_TESTS=ON -DGRAINLIGHT_BUILD_EXAMPLES=ON \
+      -DGRAINLIGHT_BUILD_BENCHMARKS=ON -DGRAINLIGHT_HEADER_CHECK=ON >/dev/null
 cmake --build "$BUILD" -j"$JOBS"
 
 phase "release: ctest"
