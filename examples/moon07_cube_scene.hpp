@@ -451,6 +451,36 @@ struct VolumeScene {
 
 /// The Moon07 cube scene (moon07_fig9_cube_shadow, moon07_fig11_spotlight).
 using CubeScene = VolumeScene<gl::BoxDistance>;
+/// A shell table cached on disk: loaded from `path` when it exists (unless `rebuild`), else built
+/// from the samples `sample()` returns (build_shell_table with `bo`) and saved there.
+struct CachedShellTable {
+    gl::ShellTable table;
+    double build_seconds = 0;   ///< CPU seconds to load or build it
+    double nmf_error = -1;      ///< NMF relative error of a built table (-1 when loaded)
+    bool cached = false;        ///< loaded from `path`
+    double raw_bytes = 0;       ///< the unfactored grid's size
+    double factored_bytes = 0;  ///< the stored factors' size
+};
+template <class Sample>
+[[nodiscard]] CachedShellTable cached_shell_table(const std::filesystem::path& path, bool rebuild,
+                                                  const gl::ShellBuildOptions& bo, Sample&& sample) {
+    CachedShellTable c;
+    const double b0 = cpu_seconds();
+    if (!rebuild && std::filesystem::exists(path)) {
+        c.table = gl::ShellTable::load(path);
+        c.cached = true;
+    } else {
+        gl::ShellBuildResult built = gl::build_shell_table(sample(), bo);
+        c.nmf_error = built.nmf_relative_error;
+        c.table = std::move(built.table);
+        c.table.save(path);
+    }
+    c.build_seconds = cpu_seconds() - b0;
+    c.raw_bytes = double(c.table.n_shells()) * bo.n_c * bo.n_u * bo.n_v * sizeof(float);
+    c.factored_bytes = double(c.table.W.size() + c.table.H.size() + c.table.fa.size()) * sizeof(float);
+    return c;
+}
+
 /// The switch-rule, shell-table and high-order options the Moon07 scene examples (Figs. 9, 11, 12)
 /// share: declared on the Example in one place (`volume` names the volume in the help texts),
 /// checked by check() after ready().

@@ -324,26 +324,16 @@ int main(int argc, char** argv) {
                           std::to_string(bo.n_v) + "_l" + std::to_string(level) + "_s" + std::to_string(seed);
         for (const auto& p : presets) key += "_" + p;
         const std::filesystem::path table_path = out / ("moon07_fig13_" + key + ".shel");
-        gl::ShellTable table;
-        double nmf_error = -1;
-        bool cached = false;
-        const double b0 = cpu_seconds();
-        if (!rebuild_table && std::filesystem::exists(table_path)) {
-            table = gl::ShellTable::load(table_path);
-            cached = true;
-        } else {
+        const CachedShellTable ct = cached_shell_table(table_path, rebuild_table, bo, [&] {
             using EB = gl::EverywhereBoundary;
             const gl::GranularAggregate<EB> bulk(tile, gl::VoxelizedBoundary<EB>({}, tile.side()), exemplars, weights, seed);
             const gl::GrainAggregateShellSource<EB> src(bulk, 20 * R);
-            const gl::ShellSamples samples = gl::collect_shell_samples(src, radii, shell_paths, seed ^ 0x13u);
-            gl::ShellBuildResult built = gl::build_shell_table(samples, bo);
-            nmf_error = built.nmf_relative_error;
-            table = std::move(built.table);
-            table.save(table_path);
-        }
-        const double build_seconds = cpu_seconds() - b0;
-        const double raw_bytes = double(table.n_shells()) * bo.n_c * bo.n_u * bo.n_v * sizeof(float);
-        const double factored_bytes = double(table.W.size() + table.H.size() + table.fa.size()) * sizeof(float);
+            return gl::collect_shell_samples(src, radii, shell_paths, seed ^ 0x13u);
+        });
+        const gl::ShellTable& table = ct.table;
+        const double build_seconds = ct.build_seconds, nmf_error = ct.nmf_error, raw_bytes = ct.raw_bytes,
+                     factored_bytes = ct.factored_bytes;
+        const bool cached = ct.cached;
         std::cerr << "moon07_fig13: shell table " << (cached ? "loaded" : "built") << " (" << build_seconds << " CPU s), "
                   << table.n_shells() << " radii " << radii.front() << ".." << radii.back() << " R\n";
 
