@@ -451,6 +451,25 @@ struct VolumeScene {
 
 /// The Moon07 cube scene (moon07_fig9_cube_shadow, moon07_fig11_spotlight).
 using CubeScene = VolumeScene<gl::BoxDistance>;
+/// The pixels of a W x H camera whose centre ray enters the scene's volume (1) or not (0), and
+/// their count; throws when fewer than 16 do (`what` names the volume in the message).
+template <class SceneT, class Camera>
+[[nodiscard]] std::vector<char> volume_pixel_mask(const SceneT& scene, const Camera& cam, int W, int H,
+                                                  std::size_t& n_mask, const std::string& what) {
+    std::vector<char> mask(std::size_t(W) * std::size_t(H), 0);
+    n_mask = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const gl::Ray<double> r = cam.generate_ray(x + 0.5, y + 0.5);
+            bool enters = false;
+            (void)scene.outside(r, scene.cube_entry(r), enters);
+            mask[std::size_t(y) * std::size_t(W) + std::size_t(x)] = enters;
+            n_mask += enters;
+        }
+    if (n_mask < 16) throw std::runtime_error("the camera sees fewer than 16 " + what + " pixels");
+    return mask;
+}
+
 /// A shell table cached on disk: loaded from `path` when it exists (unless `rebuild`), else built
 /// from the samples `sample()` returns (build_shell_table with `bo`) and saved there.
 struct CachedShellTable {

@@ -123,17 +123,8 @@ int main(int argc, char** argv) {
         // --- camera; pixels that see the cube ---
         const gl::PinholeCamera<double> cam(Vec3d(2.2 * L, -1.6 * L, 1.3 * L), Vec3d(0.5 * L, 0.5 * L, 0.42 * L),
                                             Vec3d(0, 0, 1), 36.0, W, H);
-        std::vector<char> mask(std::size_t(W) * std::size_t(H), 0);
         std::size_t n_mask = 0;
-        for (int y = 0; y < H; ++y)
-            for (int x = 0; x < W; ++x) {
-                const gl::Ray<double> r = cam.generate_ray(x + 0.5, y + 0.5);
-                bool enters = false;
-                (void)scene.outside(r, scene.cube_entry(r), enters);
-                mask[std::size_t(y) * std::size_t(W) + std::size_t(x)] = enters;
-                n_mask += enters;
-            }
-        if (n_mask < 16) throw std::runtime_error("the camera sees fewer than 16 cube pixels");
+        const std::vector<char> mask = volume_pixel_mask(scene, cam, W, H, n_mask, "cube");
 
         // --- renders (--checkpoint SECONDS / --resume: one checkpoint per batch render, kept when it
         // finishes so a resumed run skips it, all removed at the end of a completed run; the shell
