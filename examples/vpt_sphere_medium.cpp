@@ -83,8 +83,6 @@ int main(int argc, char** argv) {
             const auto png = ex.out() / "vpt_sphere_medium.png";
             gl::write_exr(exr, img);
             gl::write_png(png, img, {exposure});
-            std::vector<double> rank_rows;
-            for (int r = 0; r < ex.ranks(); ++r) rank_rows.push_back(double((height - r + ex.ranks() - 1) / ex.ranks()));
             const double paths = double(width) * double(height) * double(spp);
             auto j = ex.summary();
             j.integer("width", width)
@@ -95,7 +93,7 @@ int main(int argc, char** argv) {
                 .num("seconds", seconds)
                 .num("paths_per_second", paths / seconds)
                 .str("rank_rows", "rank r renders the rows y with y % ranks == r")
-                .nums("rank_row_counts", rank_rows)
+                .nums("rank_row_counts", ex.mpi().row_counts(height))
                 .integer("resumed_rows", resumed_rows)
                 .str("exr", exr.string())
                 .str("png", png.string());

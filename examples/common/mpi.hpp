@@ -8,13 +8,15 @@
 // Work splits: renders give rank r the rows y with y % K == r (RenderOptions::row_offset /
 // row_stride: interleaved rows balance a centred object), precomputations a contiguous block range
 // (block_range). Reductions: gather_bytes collects each rank's serialized partial on rank 0 in rank
-// order; gather_film_rows assembles a film from the ranks' rows (a placement, not a sum).
+// order; gather_film_rows assembles a film from the ranks' rows (a placement, not a sum); sum_to_root
+// adds per-rank vectors in rank order.
 #pragma once
 
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <exception>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -84,6 +86,14 @@ public:
         return ranges;
     }
 
+    /// Rows per rank of a `height`-row render split as y % size() == rank (for the JSON
+    /// summaries' "rank_row_counts").
+    [[nodiscard]] std::vector<double> row_counts(int height) const {
+        std::vector<double> counts;
+        for (int r = 0; r < size_; ++r) counts.push_back(double((height - r + size_ - 1) / size_));
+        return counts;
+    }
+
     /// Collect every rank's bytes on rank 0, in rank order (other ranks get an empty list).
     [[nodiscard]] std::vector<std::vector<unsigned char>> gather_bytes(const std::vector<unsigned char>& mine) const {
         std::vector<std::vector<unsigned char>> all;
@@ -142,6 +152,31 @@ public:
             }
         }
         return grainlight::Film::from_accumulators(w, h, std::move(sums), std::move(weights), std::move(nonfinite));
+    }
+
+    /// Element-wise sum of every rank's `values` on rank 0, added in rank order (elsewhere the
+    /// input is returned unchanged). For per-row quantities of a row-split render (zero in the
+    /// rows a rank did not render) this is a placement and bit-identical to one process; for
+    /// integer-valued counts below 2^53 it is exact.
+    [[nodiscard]] std::vector<double> sum_to_root(std::vector<double> values) const {
+#if defined(GRAINLIGHT_EXAMPLES_MPI)
+        if (size_ > 1) {
+            std::vector<unsigned char> mine(values.size() * sizeof(double));
+            std::memcpy(mine.data(), values.data(), mine.size());
+            const auto all = gather_bytes(mine);
+            if (!root()) return values;
+            std::fill(values.begin(), values.end(), 0.0);
+            for (const auto& buf : all) {
+                if (buf.size() != values.size() * sizeof(double)) throw std::runtime_error("sum_to_root: ranks sent different sizes");
+                for (std::size_t i = 0; i < values.size(); ++i) {
+                    double v;
+                    std::memcpy(&v, buf.data() + i * sizeof(double), sizeof(double));
+                    values[i] += v;
+                }
+            }
+        }
+#endif
+        return values;
     }
 
 private:

@@ -229,17 +229,21 @@ int main(int argc, char** argv) {
         gl::EptOptions opt;
         opt.max_events = full ? 4096 : 512;
 
-        // Embree render: rows over threads, one keyed generator per pixel sample.
-        gl::Film film(width, height);
+        // Embree render: this rank's rows (y % ranks == rank) over threads, one keyed generator per
+        // pixel sample, so any split over threads and MPI ranks gives the same image.
+        const int rank = ex.rank(), ranks = ex.ranks();
+        const int my_rows = (height - rank + ranks - 1) / ranks;
+        gl::Film local(width, height);
         std::vector<double> row_sum(std::size_t(height), 0.0), row_sq(std::size_t(height), 0.0);
         std::vector<std::uint64_t> row_rays(std::size_t(height), 0);
-        ProgressBar bar = ex.progress("embree", std::uint64_t(2 * height));
+        ProgressBar bar = ex.progress("embree", std::uint64_t(2 * my_rows));
         const auto t0 = std::chrono::steady_clock::now();
 #if defined(_OPENMP)
         const int nt = threads > 0 ? threads : omp_get_max_threads();
 #pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
 #endif
-        for (int y = 0; y < height; ++y) {
+        for (int i = 0; i < my_rows; ++i) {
+            const int y = rank + i * ranks;
             for (int x = 0; x < width; ++x) {
                 const std::uint64_t pixel = std::uint64_t(y) * std::uint64_t(width) + std::uint64_t(x);
                 for (std::uint64_t s = 0; s < spp; ++s) {
@@ -248,10 +252,10 @@ int main(int argc, char** argv) {
                     const auto ray = camera.generate_ray(float(x) + u.x, float(y) + u.y);
                     gl::RGB L = embree_radiance(w, lib, agg, ray, rng, opt, row_rays[std::size_t(y)]);
                     if (!L.is_finite()) {  // counted and reported, never poisoning the pixel
-                        film.add_nonfinite(x, y);
+                        local.add_nonfinite(x, y);
                         L = gl::RGB(0.0f);
                     }
-                    film.add_sample(x, y, L);
+                    local.add_sample(x, y, L);
                     row_sum[std::size_t(y)] += L[1];
                     row_sq[std::size_t(y)] += double(L[1]) * L[1];
                 }
@@ -259,16 +263,34 @@ int main(int argc, char** argv) {
             bar.advance(1);
         }
         const double t_embree = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        // Library reference: render_ept on the same scene (its own scene layer + Algorithm 1).
+        // Library reference: render_ept on the same scene (its own scene layer + Algorithm 1), the
+        // same row share.
         const auto t1 = std::chrono::steady_clock::now();
-        const gl::EptImages ref = gl::render_ept(lib, agg, camera, int(spp), seed + 1000003, threads, opt,
-                                                 [&](int n) { bar.advance(std::uint64_t(n)); });
+        gl::RenderOptions ropt;
+        ropt.spp = int(spp);
+        ropt.seed = seed + 1000003;
+        ropt.threads = threads;
+        ropt.row_offset = rank;
+        ropt.row_stride = ranks;
+        gl::EptImages ref = gl::render_ept(lib, agg, camera, ropt, opt, [&](int n) { bar.advance(std::uint64_t(n)); });
         const double t_lib = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
         bar.done();
+        std::uint64_t local_rays = 0;  // this rank's traversals (its rays per second)
+        for (const auto r : row_rays) local_rays += r;
+        // Rank 0 assembles the rows (placements, in rank order) and the per-row tallies.
+        const gl::Film film = ex.mpi().gather_film_rows(local);
+        ref.low = ex.mpi().gather_film_rows(ref.low);
+        ref.high = ex.mpi().gather_film_rows(ref.high);
+        row_sum = ex.mpi().sum_to_root(std::move(row_sum));
+        row_sq = ex.mpi().sum_to_root(std::move(row_sq));
+        const std::vector<double> rays_per_row =
+            ex.mpi().sum_to_root(std::vector<double>(row_rays.begin(), row_rays.end()));
+        if (!ex.root()) return ex.finish({});
 
         double sum = 0, sq = 0;
         std::uint64_t rays = 0;
-        for (int y = 0; y < height; ++y) sum += row_sum[std::size_t(y)], sq += row_sq[std::size_t(y)], rays += row_rays[std::size_t(y)];
+        for (int y = 0; y < height; ++y)
+            sum += row_sum[std::size_t(y)], sq += row_sq[std::size_t(y)], rays += std::uint64_t(rays_per_row[std::size_t(y)]);
         const double n = double(width) * double(height) * double(spp);
         const double mean = sum / n, se = std::sqrt(std::max(0.0, sq / n - mean * mean) / n);
         const gl::Image img = film.image(), lib_img = ref.combined();
@@ -283,7 +305,7 @@ int main(int argc, char** argv) {
         std::printf("  aggregate memory %.3f MB (O(1) in the grain count); Embree sees 1 user primitive\n",
                     double(agg.memory_bytes()) / 1e6);
         std::printf("  %dx%d, %llu spp: Embree EPT %.1f s (%.3g rays/s), library EPT %.1f s on %d threads\n", width, height,
-                    (unsigned long long)spp, t_embree, double(rays) / t_embree, t_lib, threads);
+                    (unsigned long long)spp, t_embree, double(local_rays) / t_embree, t_lib, threads);
         std::printf("  image mean (green): Embree %.5f +- %.5f vs library EPT %.5f (reference: equal within the error)\n",
                     mean, se, lib_mean);
         std::printf("wrote %s/{embree_aggregate,library_ept}.{exr,png}\n", out.c_str());
@@ -295,11 +317,13 @@ int main(int argc, char** argv) {
             .num("memory_mb", double(agg.memory_bytes()) / 1e6)
             .num("mean_embree", mean)
             .num("mean_embree_se", se)
-            .num("mean_library", lib_mean);
+            .num("mean_library", lib_mean)
+            .str("rank_rows", "rank r renders the rows y with y % ranks == r (timings: rank 0's)")
+            .nums("rank_row_counts", ex.mpi().row_counts(height));
         Example::nonfinite(j, film.nonfinite_samples() + ref.low.nonfinite_samples() + ref.high.nonfinite_samples())
             .num("seconds_embree", t_embree)
             .num("seconds_library", t_lib)
-            .num("rays_per_second", double(rays) / t_embree);
+            .num("rays_per_second", double(local_rays) / t_embree);
         return ex.finish(j);
     });
 }
