@@ -228,6 +228,11 @@ struct PointBasedOptions {
     int bounce_generations = 2;
     bool bounce_series = false;     ///< generation 2: sum the later generations as a geometric series     ///< 1: light reflected once; 2: + twice, later ones as a series
     int leaf_items = 8;             ///< octree leaf size (paper: 8)
+    /// Tree cuts skip the nodes farther from the receiver than the reach of every kernel (not in
+    /// the paper; a saving, not an approximation of Eqs. 6-8 beyond this transmittance): the
+    /// multiple-scattering table's grid (exactly zero beyond it) and, for Eq. 6 and Eq. 8, this
+    /// optical distance in the least-extinguished channel (e^-30 = 1e-13). <= 0: no culling.
+    F cull_optical_distance = F(30);
 };
 
 /// Radiance split by component (W sr^-1 m^-2 per channel).
@@ -346,6 +351,7 @@ public:
                        opt.bounce_rays, "[1, 1024]");
         check_argument(opt.bounce_k_max >= 1 && opt.bounce_k_max <= 4096, "PointBasedRenderer", "bounce_k_max",
                        opt.bounce_k_max, "[1, 4096]");
+        set_reach();
         build_samples(surface, light, rng);
         if (opt.bounced && opt.bounce_samples > 0) {
             if (bounce_surface.empty())
@@ -388,6 +394,7 @@ public:
                                "compressed ms table albedo", q->albedo(c), "the medium's albedo");
         }
         msq_ = q;
+        set_reach();
     }
     /// True if a multiple-scattering table (dense or compressed) is in use.
     [[nodiscard]] bool has_table() const noexcept { return msq_ != nullptr || ms_ != nullptr; }
@@ -467,6 +474,11 @@ public:
         const Phase& ph = medium_.phase();
         auto pval = [&](const Vec3<F>& a, const Vec3<F>& b) { return F(ph.eval(a, b).value.average()); };
         const S sig_s = medium_.sigma_s();
+        const bool with_table = opt_.multiple && has_table();
+        CutCriterion<F> cut_r = cut;
+        if (opt_.cull_optical_distance > F(0))
+            cut_r.max_distance = std::min(cut.max_distance, std::max(opt_.double_ ? reach_kernel_ : F(0),
+                                                                     with_table ? reach_table_ : F(0)));
         auto contrib = [&](const Vec3<F>& xv, const Vec3<F>& dv, const S& wv, F coherence, F c_view) {
             const Vec3<F> rv = P - xv;
             const F r = glm::length(rv);
@@ -477,7 +489,7 @@ public:
                 const F k = inverse_square_ball(r, r_min_);
                 dbl += sig_s * sig_s * wv * medium_.transmittance(r) * pp * k;
             }
-            if (opt_.multiple && has_table()) {
+            if (with_table && r <= reach_table_) {  // beyond reach_table_ the table is 0 in every channel
                 S m = table_response(rv, dv, to_cam);
                 if constexpr (TangentPlaneBoundary<Boundary, F>) {
                     if (opt_.ms_boundary_image) {
@@ -505,23 +517,33 @@ public:
         auto item_fn = [&](const Item& it) { contrib(it.p, it.d, it.w, F(1), F(1)); };
         if (two_step_depth > 0) {
             std::array<std::uint32_t, 1024> buf;
-            const std::size_t n = tree.coarse_cut(P, to_cam, cut, pval, two_step_depth, std::span(buf));
+            const std::size_t n = tree.coarse_cut(P, to_cam, cut_r, pval, two_step_depth, std::span(buf));
             if (n <= buf.size()) {
-                tree.tree_cut_from(std::span<const std::uint32_t>(buf.data(), n), P, to_cam, cut, pval, node_fn,
+                tree.tree_cut_from(std::span<const std::uint32_t>(buf.data(), n), P, to_cam, cut_r, pval, node_fn,
                                     item_fn);
                 return;
             }
         }
-        tree.tree_cut(P, to_cam, cut, pval, node_fn, item_fn);
+        tree.tree_cut(P, to_cam, cut_r, pval, node_fn, item_fn);
     }
 
     /// Table response (Eq. 7 without the source power) at offset rv = P - x_v from a source
     /// travelling along dv, toward `to_cam`, per channel: sigma_t^3 L_o(rho sigma_t, z sigma_t, .).
     [[nodiscard]] S table_response(const Vec3<F>& rv, const Vec3<F>& dv, const Vec3<F>& to_cam) const noexcept {
-        S m;
-        const MsDirection dir = table_direction(rv, dv, to_cam);
+        S m(F(0));
         const F z = glm::dot(rv, dv);
         const F rho = glm::length(rv - z * dv);
+        // The direction lookup (acos, atan2) only where some channel is on the grid (the same
+        // test as the table's corners; 0 elsewhere).
+        const MsTableGrid& g = msq_ ? msq_->grid() : ms_->grid();
+        bool on_grid = false;
+        for (std::size_t c = 0; c < S::size && !on_grid; ++c) {
+            const F st = medium_.sigma_t()[c];
+            const double rr = double(rho * st), zz = double(z * st);
+            on_grid = rr >= 0 && rr <= g.rho_max && zz >= g.z_min && zz <= g.z_max;
+        }
+        if (!on_grid) return m;
+        const MsDirection dir = table_direction(rv, dv, to_cam);
         for (std::size_t c = 0; c < S::size; ++c) {
             const F st = medium_.sigma_t()[c];
             m[c] = F(table_eval(c, double(rho * st), double(z * st), dir)) * st * st * st;
@@ -598,8 +620,10 @@ public:
                                           : F(2) * pi_v<F> * (F(1) - F(1) / std::sqrt(F(1) + x));
             acc += ws * (omega_s / area) * medium_.transmittance(r) * ph.eval(qh, to_cam).value;
         };
+        CutCriterion<F> cut_r = cut;
+        if (opt_.cull_optical_distance > F(0)) cut_r.max_distance = std::min(cut.max_distance, reach_kernel_);
         surf_tree_.tree_cut(
-            P, to_cam, cut, pval,
+            P, to_cam, cut_r, pval,
             [&](const typename Octree<F, S>::Node& nd) { contrib(nd.p, nd.d, nd.w, F(nd.end - nd.begin) * bounce_area_); },
             [&](const Item& it) {
                 // Near a sample its light is spread over the disk of its area a: an equal-area
@@ -650,6 +674,23 @@ public:
     }
 
 private:
+    /// Reach of the kernels (PointBasedOptions::cull_optical_distance): Eqs. 6 and 8 to that
+    /// optical distance in the least-extinguished channel; the table to its grid's farthest
+    /// point (sqrt(rho_max^2 + max(z_min^2, z_max^2)) mean free paths, the longest channel's),
+    /// with a 0.1 % margin for rounding.
+    void set_reach() noexcept {
+        const F smin = medium_.sigma_t().min_value();
+        reach_kernel_ = opt_.cull_optical_distance > F(0) ? opt_.cull_optical_distance / smin
+                                                          : std::numeric_limits<F>::infinity();
+        const MsTableGrid* g = msq_ ? &msq_->grid() : (ms_ ? &ms_->grid() : nullptr);
+        if (!g) {
+            reach_table_ = F(0);
+            return;
+        }
+        const double zr = std::max(std::abs(g->z_min), std::abs(g->z_max));
+        reach_table_ = F(1.001 * std::sqrt(g->rho_max * g->rho_max + zr * zr) / double(smin));
+    }
+
     void build_samples(const std::vector<SurfaceSample<F>>& surface, const Light<F, S>& light, Rng& rng) {
         std::vector<Item> items;
         const int nl = light.is_delta() ? 1 : opt_.light_samples;
@@ -963,6 +1004,8 @@ private:
     const MsTable<N>* ms_;
     const MsTableQuadtree<N>* msq_ = nullptr;
     F sigma_bar_ = F(1), step_ = F(0.1), r_min_ = F(0.1);
+    F reach_kernel_ = std::numeric_limits<F>::infinity();  ///< cull distance of Eqs. 6 and 8 (scene units)
+    F reach_table_ = F(0);  ///< distance beyond which the table is 0 in every channel (scene units)
     std::array<F, S::size> image_offset_{};  ///< ms_image_offset in scene units per channel
     Octree<F, S> tree_;
     Octree<F, S> surf_tree_;

@@ -83,7 +83,24 @@ struct CutCriterion {
     F eps1 = F(0.1);                ///< always subdivide above this solid angle (sr); paper: 0.1-0.5
     F eps2 = F(0.01);               ///< subdivide above this solid angle if the phase is peaked (sr)
     F phase_max = pi_v<F> / F(4);   ///< "p > pi/4" of Alg. 1 (phase value, 1/sr)
+    /// Skip a node and its subtree when every item position is farther than this from P (the
+    /// distance from P to the node's position bounds): a receiver beyond the reach of every
+    /// kernel gets nothing from it (not in the paper; infinity = no culling, Alg. 1 as is).
+    F max_distance = std::numeric_limits<F>::infinity();
 };
+
+/// Squared distance from P to the box b (0 inside).
+template <std::floating_point F>
+[[nodiscard]] inline F box_distance2(const Aabb<F>& b, const Vec3<F>& P) noexcept {
+    const Vec3<F> d = glm::max(glm::max(b.lo - P, P - b.hi), Vec3<F>(F(0)));
+    return glm::dot(d, d);
+}
+
+/// True if the cut `c` skips node bounds `b` seen from P (CutCriterion::max_distance).
+template <std::floating_point F>
+[[nodiscard]] inline bool cut_culls(const CutCriterion<F>& c, const Aabb<F>& b, const Vec3<F>& P) noexcept {
+    return c.max_distance < std::numeric_limits<F>::infinity() && box_distance2(b, P) > c.max_distance * c.max_distance;
+}
 
 /// Density factor k_v of Wang18 Eq. 4: (clamp(A_v / S_v, 1, 8) * clamp(sigma_t, 0.3, 0.8))^2.
 /// A_v: bounding-box area of the leaf's volume samples, S_v: area around the surface sample at the
@@ -206,6 +223,7 @@ public:
         while (sp > 0) {
             const std::uint32_t ni = stack[--sp];
             const Node& n = nodes_[ni];
+            if (cut_culls(c, n.bounds, P)) continue;
             if (n.depth >= stop_depth || n.leaf() || !subdivide(n, P, o, c, phase)) {
                 if (n_out >= out.size()) return out.size() + 1;
                 out[n_out++] = ni;
@@ -268,6 +286,7 @@ private:
         stack[sp++] = root;
         while (sp > 0) {
             const Node& n = nodes_[stack[--sp]];
+            if (cut_culls(c, n.bounds, P)) continue;
             if (!subdivide(n, P, o, c, phase)) {
                 node_fn(n);
                 continue;
