@@ -24,14 +24,18 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <vector>
 
+#include "common/checkpoint.hpp"
 #include "common/harness.hpp"
 #include "grainlight/geometry/closed_mesh.hpp"
 #include "grainlight/geometry/surface_sampling.hpp"
 #include "grainlight/integrators/point_based.hpp"
+#include "grainlight/integrators/render.hpp"
 #include "grainlight/integrators/walk.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/phase/henyey_greenstein.hpp"
@@ -81,6 +85,57 @@ inline double cpu_seconds() {
     timespec ts{};
     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
     return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+/// The render driver for the Wang18 examples' camera-ray and reference renders (the generic gather
+/// of the point-based renders): rows of a W x H image into `films` films (at most 16) through
+/// grainlight::render_rows, so a render takes the harness's --checkpoint SECONDS / --resume
+/// (checkpoint file `stem` in --out; a killed and resumed render is byte-identical, since every
+/// pixel's samples are keyed by (seed, pixel, sample)) and splits its rows over the MPI ranks
+/// (rank r renders the rows y with y % ranks == r); every film is then gathered on rank 0 in a
+/// fixed order (a placement of rows, not a sum). `row(y, films)` renders row y into every film
+/// and must touch only row y. Rank 0 gets the complete films; the other ranks get black films of
+/// the same size (their results are not used). `spp` only fingerprints the checkpoint.
+template <class RowFn>
+[[nodiscard]] std::vector<gl::Film> render_rows(const gl_examples::Example& ex, const std::string& label,
+                                                const std::string& stem, int W, int H, int films, int spp, RowFn&& row) {
+    const gl::RenderOptions o = gl_examples::render_options(ex, spp, stem);
+    auto bar = ex.progress(label, std::uint64_t(H));
+    std::vector<gl::Film> local = gl::render_rows(
+        W, H, films, o, [&](int y, std::span<gl::Film> f) { row(y, f); },
+        [&](int n) { bar.advance(std::uint64_t(n)); });
+    bar.done();
+    std::vector<gl::Film> out;
+    for (const gl::Film& f : local) {
+        gl::Film g = ex.mpi().gather_film_rows(f);
+        out.push_back(ex.root() ? std::move(g) : gl::Film(W, H));
+    }
+    return out;
+}
+
+/// Sum of `x` over the MPI ranks, on rank 0 (CPU seconds of a split render); `x` elsewhere.
+[[nodiscard]] inline double sum_over_ranks(const gl_examples::Example& ex, double x) {
+    if (ex.ranks() == 1) return x;
+    std::vector<unsigned char> mine(sizeof(double));
+    std::memcpy(mine.data(), &x, sizeof(double));
+    const auto all = ex.mpi().gather_bytes(mine);
+    if (!ex.root()) return x;
+    double s = 0;
+    for (const auto& b : all) {
+        double v = 0;
+        std::memcpy(&v, b.data(), sizeof(double));
+        s += v;
+    }
+    return s;
+}
+
+/// Rows of each rank for the JSON summaries ("rank_rows", "rank_row_counts").
+inline void put_rank_rows(const gl_examples::Example& ex, gl_examples::Json& j, int H) {
+    std::vector<double> rows;
+    for (int r = 0; r < ex.ranks(); ++r) rows.push_back(double((H - r + ex.ranks() - 1) / ex.ranks()));
+    j.str("rank_rows", "rank r renders the rows y with y % ranks == r of every camera-ray and reference render; "
+                       "the light samples are built on every rank (deterministic)")
+        .nums("rank_row_counts", rows);
 }
 
 /// The bumpy-sphere scene.
@@ -145,9 +200,10 @@ inline gl::PointBasedOptions<float> default_options(const BumpyScene& sc, bool f
 }
 
 /// The multiple-scattering table of the material with HG g (Eq. 7), built once and cached in
-/// `dir` keyed by its parameters. `cpu` receives the build (or load) CPU seconds.
+/// `dir` keyed by its parameters (written only with `write`: rank 0). `cpu` receives the build
+/// (or load) CPU seconds.
 inline gl::MsTable<3> cached_table(const std::filesystem::path& dir, const BumpyScene& sc, bool full, std::uint64_t seed,
-                                   double& cpu, bool& cached) {
+                                   double& cpu, bool& cached, bool write = true) {
     gl::MsTableOptions to;
     to.n_rho = full ? 96 : 48;
     to.n_z = full ? 192 : 96;
@@ -176,7 +232,7 @@ inline gl::MsTable<3> cached_table(const std::filesystem::path& dir, const Bumpy
     }
     if (!cached) {
         table = gl::MsTable<3>::build(Phase(sc.g), sc.albedo, to);
-        table.save(path);
+        if (write) table.save(path);
     }
     cpu = cpu_seconds() - c0;
     return table;
@@ -217,32 +273,32 @@ inline PbRun render_pb(const gl_examples::Example& ex, const BumpyScene& sc, con
     r.volume_samples = pb.volume_sample_count();
     r.bytes = pb.bytes();
     c0 = cpu_seconds();
-    (void)ex.parallel<int>(
-        label, std::uint64_t(sc.H), 1,
-        [&](std::uint64_t, std::uint64_t y0, std::uint64_t y1) {
-            for (std::uint64_t y = y0; y < y1; ++y)
-                for (int x = 0; x < sc.W; ++x) {
-                    gl::PointBasedComponents<gl::RGB> acc;
-                    for (int k = 0; k < rays; ++k) {
-                        gl::Rng rng = gl::Rng::from_key(seed, y * std::uint64_t(sc.W) + std::uint64_t(x), 0x10000u + std::uint64_t(k));
-                        const gl::Vec2f u = rng.uniform2<float>();
-                        const auto c = pb.radiance_components(sc.camera.generate_ray(float(x) + u.x, float(y) + u.y), rng);
-                        acc.single += c.single;
-                        acc.double_ += c.double_;
-                        acc.multiple += c.multiple;
-                        acc.bounced += c.bounced;
-                    }
-                    const float inv = 1.0f / float(rays);
-                    for (int ch = 0; ch < 3; ++ch) {
-                        const float v[4] = {acc.single[ch], acc.double_[ch], acc.multiple[ch], acc.bounced[ch]};
-                        for (int k = 0; k < 4; ++k) r.img[std::size_t(k)].at(x, int(y), ch) = v[k] * inv;
-                        r.img[4].at(x, int(y), ch) = (v[0] + v[1] + v[2] + v[3]) * inv;
-                    }
+    const std::vector<gl::Film> f = render_rows(
+        ex, label, label, sc.W, sc.H, kComp, rays, [&](int y, std::span<gl::Film> film) {
+            for (int x = 0; x < sc.W; ++x) {
+                gl::PointBasedComponents<gl::RGB> acc;
+                for (int k = 0; k < rays; ++k) {
+                    gl::Rng rng = gl::Rng::from_key(seed, std::uint64_t(y) * std::uint64_t(sc.W) + std::uint64_t(x),
+                                                    0x10000u + std::uint64_t(k));
+                    const gl::Vec2f u = rng.uniform2<float>();
+                    const auto c = pb.radiance_components(sc.camera.generate_ray(float(x) + u.x, float(y) + u.y), rng);
+                    acc.single += c.single;
+                    acc.double_ += c.double_;
+                    acc.multiple += c.multiple;
+                    acc.bounced += c.bounced;
                 }
-            return 0;
-        },
-        [](int&, int) {});
-    r.cpu_render = cpu_seconds() - c0;
+                const float inv = 1.0f / float(rays);
+                float v[kComp][3];
+                for (int ch = 0; ch < 3; ++ch) {
+                    const float a[4] = {acc.single[ch], acc.double_[ch], acc.multiple[ch], acc.bounced[ch]};
+                    for (int k = 0; k < 4; ++k) v[k][ch] = a[k] * inv;
+                    v[4][ch] = (a[0] + a[1] + a[2] + a[3]) * inv;
+                }
+                for (int k = 0; k < kComp; ++k) film[std::size_t(k)].add_rgb(x, y, v[k][0], v[k][1], v[k][2]);
+            }
+        });
+    for (int k = 0; k < kComp; ++k) r.img[std::size_t(k)] = f[std::size_t(k)].image();
+    r.cpu_render = sum_over_ranks(ex, cpu_seconds() - c0);
     return r;
 }
 
@@ -309,6 +365,48 @@ struct VptRun {
     }
 };
 
+/// The reference's walks (one grey walk per channel, `scenes[ch]`), batch b = samples s with
+/// s % kBatches == b, each batch one render_rows pass (checkpoint stem "<label> batch b") of
+/// kComp films whose sums go to v.bs (v.W, v.H, v.spp and v.bs sized by the caller). The sums
+/// per pixel, batch and channel add the samples in increasing s, as a single loop would.
+template <class Camera>
+inline void vpt_batches(const gl_examples::Example& ex, const std::string& label, int W, int H, int spp,
+                        std::uint64_t seed, const std::vector<SceneG>& scenes, const Camera& camera,
+                        const gl::WalkOptions<float>& wo, VptRun& v) {
+    const std::size_t npx = std::size_t(W) * std::size_t(H);
+    for (int b = 0; b < kBatches; ++b) {
+        const std::vector<gl::Film> f = render_rows(
+            ex, label + " batch " + std::to_string(b + 1) + "/" + std::to_string(kBatches),
+            label + " batch " + std::to_string(b), W, H, kComp, spp, [&](int y, std::span<gl::Film> film) {
+                for (int x = 0; x < W; ++x) {
+                    const std::size_t p = std::size_t(y) * std::size_t(W) + std::size_t(x);
+                    for (int s = b; s < spp; s += kBatches) {
+                        double L[kComp][3] = {};
+                        for (int ch = 0; ch < 3; ++ch) {
+                            gl::Rng rng = gl::Rng::from_key(seed, p, std::uint64_t(s) * 3 + std::uint64_t(ch));
+                            const gl::Vec2f u = rng.uniform2<float>();
+                            SplitVpt cb{scenes[std::size_t(ch)]};
+                            auto st = gl::start_path<float, Grey>(camera.generate_ray(float(x) + u.x, float(y) + u.y), -1);
+                            (void)gl::walk(scenes[std::size_t(ch)], st, rng, cb, wo);
+                            double tot = 0;
+                            for (int k = 0; k < 4; ++k) {
+                                L[k][ch] = cb.L[std::size_t(k)];
+                                tot += cb.L[std::size_t(k)];
+                            }
+                            L[4][ch] = tot;
+                        }
+                        for (int k = 0; k < kComp; ++k) film[std::size_t(k)].add_rgb(x, y, L[k][0], L[k][1], L[k][2]);
+                    }
+                }
+            });
+        for (int k = 0; k < kComp; ++k) {
+            const auto sums = f[std::size_t(k)].sums();
+            for (std::size_t p = 0; p < npx; ++p)
+                for (int ch = 0; ch < 3; ++ch) v.bs[v.idx(k, b, p, ch)] = sums[3 * p + std::size_t(ch)];
+        }
+    }
+}
+
 /// Render the reference with `spp` samples per pixel and channel (a multiple of kBatches).
 inline VptRun render_vpt(const gl_examples::Example& ex, const BumpyScene& sc, int spp, std::uint64_t seed,
                          const std::string& label) {
@@ -327,34 +425,9 @@ inline VptRun render_vpt(const gl_examples::Example& ex, const BumpyScene& sc, i
     }
     const std::size_t npx = std::size_t(sc.W) * std::size_t(sc.H);
     v.bs.assign(std::size_t(kComp) * kBatches * npx * 3, 0.0);
-    gl::WalkOptions<float> wo;  // no max_depth cap; Russian roulette after 5 events
     const double c0 = cpu_seconds();
-    (void)ex.parallel<int>(
-        label, std::uint64_t(sc.H), 1,
-        [&](std::uint64_t, std::uint64_t y0, std::uint64_t y1) {
-            for (std::uint64_t y = y0; y < y1; ++y)
-                for (int x = 0; x < sc.W; ++x) {
-                    const std::size_t p = std::size_t(y) * std::size_t(sc.W) + std::size_t(x);
-                    for (int ch = 0; ch < 3; ++ch)
-                        for (int s = 0; s < spp; ++s) {
-                            gl::Rng rng = gl::Rng::from_key(seed, p, std::uint64_t(s) * 3 + std::uint64_t(ch));
-                            const gl::Vec2f u = rng.uniform2<float>();
-                            SplitVpt cb{scenes[std::size_t(ch)]};
-                            auto st = gl::start_path<float, Grey>(sc.camera.generate_ray(float(x) + u.x, float(y) + u.y), -1);
-                            (void)gl::walk(scenes[std::size_t(ch)], st, rng, cb, wo);
-                            const int b = s % kBatches;
-                            double tot = 0;
-                            for (int k = 0; k < 4; ++k) {
-                                v.bs[v.idx(k, b, p, ch)] += cb.L[std::size_t(k)];
-                                tot += cb.L[std::size_t(k)];
-                            }
-                            v.bs[v.idx(4, b, p, ch)] += tot;
-                        }
-                }
-            return 0;
-        },
-        [](int&, int) {});
-    v.cpu = cpu_seconds() - c0;
+    vpt_batches(ex, label, sc.W, sc.H, spp, seed, scenes, sc.camera, gl::WalkOptions<float>{}, v);
+    v.cpu = sum_over_ranks(ex, cpu_seconds() - c0);
     v.img.assign(kComp, gl::Image(sc.W, sc.H));
     for (int k = 0; k < kComp; ++k)
         for (std::size_t p = 0; p < npx; ++p)
@@ -431,6 +504,13 @@ inline Comparison compare(const PbRun& pb, const VptRun& v) {
     const double t_ref = c.ref_var_per_sample / c.e2[4] * (v.cpu / double(v.spp));
     c.speedup = pb.cpu_total() > 0 ? t_ref / pb.cpu_total() : 0.0;
     return c;
+}
+
+/// Write `img` as EXR and PNG (exposure `exposure`) into --out, on rank 0 only.
+inline void save_image(const gl_examples::Example& ex, const std::string& name, const gl::Image& img, double exposure) {
+    if (!ex.root()) return;
+    gl::write_exr(ex.out() / (name + ".exr"), img);
+    gl::write_png(ex.out() / (name + ".png"), img, {exposure});
 }
 
 /// Write `img` as EXR and PNG (exposure `exposure`) into `dir`.

@@ -39,6 +39,7 @@ int main(int argc, char** argv) {
             const double bumps = ex.opt<double>("bumps", 0.06, "relative height of the bumps");
             const std::string obj = ex.opt<std::string>(
                 "obj", "", "a closed Wavefront OBJ mesh as the boundary instead of the bumpy sphere (scaled to radius 1)");
+            ex.checkpointable();
             ex.ready();
             if (vpt_spp < 16 || vpt_spp % wang18::kBatches != 0)
                 throw gl_examples::cli_error("--vpt-spp must be >= 16 and a multiple of 8");
@@ -58,7 +59,7 @@ int main(int argc, char** argv) {
             const wang18::BumpyScene sc = wang18::make_bumpy_scene(W, float(R_opt), 0.7f, level, bumps, obj);
             double cpu_table = 0;
             bool cached = false;
-            const gl::MsTable<3> table = wang18::cached_table(out, sc, full, seed, cpu_table, cached);
+            const gl::MsTable<3> table = wang18::cached_table(out, sc, full, seed, cpu_table, cached, ex.root());
             const gl::MsTableQuadtree<3> qtree(table, tol);
             // Table 2's table: 1024 x 512 (rho, z) cells x 36 x 18 directions x 3 channels of floats.
             const double paper_dense_bytes = 1024.0 * 512.0 * 36.0 * 18.0 * 3.0 * 4.0;
@@ -77,11 +78,12 @@ int main(int argc, char** argv) {
             for (int k = 0; k < wang18::kComp; ++k)
                 c.rel_se[k] = c.ref[k] > 0 ? std::hypot(c.ref_se[k], pb_se[std::size_t(k)]) / c.ref[k] : 0.0;
 
+            if (!ex.root()) return ex.finish({});  // rank 0 writes and prints
             const double exposure = 4.0;
             for (int k = 0; k < wang18::kComp; ++k) {
                 const std::string nm = wang18::kCompName[k];
-                wang18::save_image(out, "wang18_fig12_pb_" + nm, pb.img[std::size_t(k)], exposure);
-                wang18::save_image(out, "wang18_fig12_vpt_" + nm, vpt.img[std::size_t(k)], exposure);
+                wang18::save_image(ex, "wang18_fig12_pb_" + nm, pb.img[std::size_t(k)], exposure);
+                wang18::save_image(ex, "wang18_fig12_vpt_" + nm, vpt.img[std::size_t(k)], exposure);
             }
             if (!obj.empty()) std::printf("Boundary mesh: %s\n", obj.c_str());
             std::printf("Wang18 Fig. 12: bumpy sphere mesh (%zu triangles, bumps %.2f), radius %.0f green mean free paths, "
@@ -121,6 +123,7 @@ int main(int argc, char** argv) {
 
             gl_examples::Json j = ex.summary();
             j.integer("width", W).integer("rays", rays).integer("builds", builds).integer("vpt_spp", vpt_spp).integer("surface_samples", pb.surface_samples);
+            wang18::put_rank_rows(ex, j, W);
             j.integer("triangles", (long long)sc.shape.triangle_count()).integer("volume_samples", (long long)pb.volume_samples);
             for (int k = 0; k < wang18::kComp; ++k) {
                 const std::string nm = wang18::kCompName[k];

@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
             const int rays = ex.opt<int>("rays", 4, 4, "camera rays per pixel of the point-based render");
             const int W = ex.opt<int>("width", 20, 64, "image width = height in pixels");
             const double R_opt = ex.opt<double>("radius-mfp", 20.0, "sphere radius in green mean free paths");
+            ex.checkpointable();
             ex.ready();
             wang18::check_vpt_spp(vpt_spp);
             wang18::check_surface_samples(n_surface);
@@ -43,16 +44,16 @@ int main(int argc, char** argv) {
                                   "rel_diff_double", "rel_diff_multiple", "rel_diff_bounced", "rel_diff_total",
                                   "seconds_pb", "seconds_vpt"});
             std::vector<double> e2[wang18::kComp], rel[wang18::kComp];
-            std::printf("Wang18 Fig. 14: e^2 per component vs g, bumpy sphere mesh, radius %.0f green mfp, BmpS. albedo, "
+            if (ex.root()) std::printf("Wang18 Fig. 14: e^2 per component vs g, bumpy sphere mesh, radius %.0f green mfp, BmpS. albedo, "
                         "%d surface samples, %d x %d pixels, VPT %d spp\n",
                         R_opt, n_surface, W, W, vpt_spp);
-            std::printf("  %5s %11s %11s %11s %11s %11s   rel.diff total\n", "g", "single", "double", "multiple", "bounced",
+            if (ex.root()) std::printf("  %5s %11s %11s %11s %11s %11s   rel.diff total\n", "g", "single", "double", "multiple", "bounced",
                         "total");
             for (double g : gs) {
                 const wang18::BumpyScene sc = wang18::make_bumpy_scene(W, float(R_opt), float(g));
                 double cpu_table = 0;
                 bool cached = false;
-                const gl::MsTable<3> table = wang18::cached_table(out, sc, full, seed, cpu_table, cached);
+                const gl::MsTable<3> table = wang18::cached_table(out, sc, full, seed, cpu_table, cached, ex.root());
                 gl::PointBasedOptions<float> po = wang18::default_options(sc, full);
                 po.bounce_samples = full ? 2048 : 256;
                 char lab[64];
@@ -70,15 +71,17 @@ int main(int argc, char** argv) {
                 row.push_back(pb.cpu_total());
                 row.push_back(vpt.cpu);
                 csv.row(row);
-                std::printf("  %5.2f %11.3e %11.3e %11.3e %11.3e %11.3e   %+.1f%% (+- %.1f%%)\n", g, c.e2[0], c.e2[1], c.e2[2],
+                if (ex.root()) std::printf("  %5.2f %11.3e %11.3e %11.3e %11.3e %11.3e   %+.1f%% (+- %.1f%%)\n", g, c.e2[0], c.e2[1], c.e2[2],
                             c.e2[3], c.e2[4], 100 * c.rel[4], 100 * c.rel_se[4]);
             }
+            if (!ex.root()) return ex.finish({});  // rank 0 writes and prints
             const auto csv_path = ex.csv("wang18_fig14_mse_vs_g.csv", csv);
             ex.plot("wang18_sweep", csv_path, out / "wang18_fig14_mse_vs_g.png",
                     {"HG g", "-", "Wang18 Fig. 14: error per component vs g (bumpy sphere)"});
             gl_examples::Json j = ex.summary();
+            wang18::put_rank_rows(ex, j, W);
             j.nums("g", gs).integer("surface_samples", n_surface).integer("vpt_spp", vpt_spp).integer("width", W);
-            std::printf("  spread of e^2 over g (max / min) per component:");
+            if (ex.root()) std::printf("  spread of e^2 over g (max / min) per component:");
             for (int k = 0; k < wang18::kComp; ++k) {
                 const std::string nm = wang18::kCompName[k];
                 const double mx = *std::max_element(e2[k].begin(), e2[k].end());
@@ -88,9 +91,9 @@ int main(int argc, char** argv) {
                 for (double r : rel[k]) worst = std::max(worst, std::abs(r));
                 j.nums("e2_" + nm, e2[k]).nums("rel_diff_" + nm, rel[k]).num("e2_spread_" + nm, spread).num(
                     "max_abs_rel_diff_" + nm, worst);
-                std::printf(" %s %.1fx", nm.c_str(), spread);
+                if (ex.root()) std::printf(" %s %.1fx", nm.c_str(), spread);
             }
-            std::printf("   [paper Fig. 14: within one order of magnitude, MSE ~1e-4..1e-3]\n");
+            if (ex.root()) std::printf("   [paper Fig. 14: within one order of magnitude, MSE ~1e-4..1e-3]\n");
             j.str("png", (out / "wang18_fig14_mse_vs_g.png").string());
             return ex.finish(j);
         });

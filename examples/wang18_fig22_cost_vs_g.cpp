@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
             const int W = ex.opt<int>("width", 16, 64, "image width = height in pixels");
             const int rays = ex.opt<int>("rays", 4, 4, "camera rays per pixel");
             const double R_opt = ex.opt<double>("radius-mfp", 20.0, "sphere radius in green mean free paths");
+            ex.checkpointable();
             ex.ready();
             wang18::check_surface_samples(n_surface);
             wang18::check_render_args(rays, W, R_opt);
@@ -43,10 +44,10 @@ int main(int argc, char** argv) {
             const char* names[5] = {"single", "double", "multiple", "bounced", "all"};
             std::vector<double> cost[5];
             gl_examples::Csv csv({"g", "cost_single", "cost_double", "cost_multiple", "cost_bounced", "cost_all"});
-            std::printf("Wang18 Fig. 22: CPU microseconds per camera ray reaching the medium, bumpy sphere mesh, radius %.0f "
+            if (ex.root()) std::printf("Wang18 Fig. 22: CPU microseconds per camera ray reaching the medium, bumpy sphere mesh, radius %.0f "
                         "green mfp, %d surface samples, %d x %d pixels x %d rays\n",
                         R_opt, n_surface, W, W, rays);
-            std::printf("  %5s %10s %10s %10s %10s %10s\n", "g", "single", "double", "multiple", "bounced", "all");
+            if (ex.root()) std::printf("  %5s %10s %10s %10s %10s %10s\n", "g", "single", "double", "multiple", "bounced", "all");
             for (double g : gs) {
                 const wang18::BumpyScene sc = wang18::make_bumpy_scene(W, float(R_opt), float(g));
                 // Camera rays that reach the medium (the pixel-centre ray of each pixel hits or not).
@@ -59,7 +60,7 @@ int main(int argc, char** argv) {
                     }
                 double cpu_table = 0;
                 bool cached = false;
-                const gl::MsTable<3> table = wang18::cached_table(out, sc, full, seed, cpu_table, cached);
+                const gl::MsTable<3> table = wang18::cached_table(out, sc, full, seed, cpu_table, cached, ex.root());
                 double c[5]{};
                 for (int k = 0; k < 5; ++k) {
                     gl::PointBasedOptions<float> po = wang18::default_options(sc, full);
@@ -83,13 +84,15 @@ int main(int argc, char** argv) {
                     row.push_back(c[k]);
                 }
                 csv.row(row);
-                std::printf("  %5.2f %10.1f %10.1f %10.1f %10.1f %10.1f\n", g, c[0], c[1], c[2], c[3], c[4]);
+                if (ex.root()) std::printf("  %5.2f %10.1f %10.1f %10.1f %10.1f %10.1f\n", g, c[0], c[1], c[2], c[3], c[4]);
             }
+            if (!ex.root()) return ex.finish({});  // rank 0 writes and prints
             const auto csv_path = ex.csv("wang18_fig22_cost_vs_g.csv", csv);
             ex.plot("wang18_sweep", csv_path, out / "wang18_fig22_cost_vs_g.png",
                     {"HG g", "CPU microseconds per camera ray", "Wang18 Fig. 22: cost per ray vs g (bumpy sphere)"});
-            std::printf("  [paper Fig. 22: single roughly constant, double and multiple growing linearly with g]\n");
+            if (ex.root()) std::printf("  [paper Fig. 22: single roughly constant, double and multiple growing linearly with g]\n");
             gl_examples::Json j = ex.summary();
+            wang18::put_rank_rows(ex, j, W);
             j.nums("g", gs).integer("surface_samples", n_surface).integer("width", W);
             for (int k = 0; k < 5; ++k) {
                 j.nums(std::string("cost_") + names[k] + "_us", cost[k]);

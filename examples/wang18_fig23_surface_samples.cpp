@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
             const int rays = ex.opt<int>("rays", 4, 4, "camera rays per pixel of the point-based render");
             const int W = ex.opt<int>("width", 20, 64, "image width = height in pixels");
             const double R_opt = ex.opt<double>("radius-mfp", 20.0, "sphere radius in green mean free paths");
+            ex.checkpointable();
             ex.ready();
             wang18::check_vpt_spp(vpt_spp);
             wang18::check_render_args(rays, W, R_opt);
@@ -42,16 +43,16 @@ int main(int argc, char** argv) {
             const wang18::BumpyScene sc = wang18::make_bumpy_scene(W, float(R_opt), 0.7f);
             double cpu_table = 0;
             bool cached = false;
-            const gl::MsTable<3> table = wang18::cached_table(out, sc, full, seed, cpu_table, cached);
+            const gl::MsTable<3> table = wang18::cached_table(out, sc, full, seed, cpu_table, cached, ex.root());
             const wang18::VptRun vpt = wang18::render_vpt(ex, sc, vpt_spp, seed, "fig23 VPT reference");
             const gl::PointBasedOptions<float> po = wang18::default_options(sc, full);
             gl_examples::Csv csv({"surface_samples", "e2_total", "e2_multiple", "cost_seconds", "cost_render_seconds",
                                   "rel_diff_total", "volume_samples"});
             std::vector<double> e2, secs, rel;
-            std::printf("Wang18 Fig. 23: time and error vs surface samples, bumpy sphere mesh, radius %.0f green mfp, g 0.7, "
+            if (ex.root()) std::printf("Wang18 Fig. 23: time and error vs surface samples, bumpy sphere mesh, radius %.0f green mfp, g 0.7, "
                         "%d x %d pixels, VPT %d spp (%.2f s)\n",
                         R_opt, W, W, vpt_spp, vpt.cpu);
-            std::printf("  %9s %13s %11s %11s %11s %10s\n", "samples", "volume samp.", "CPU s", "render s", "e^2 total",
+            if (ex.root()) std::printf("  %9s %13s %11s %11s %11s %10s\n", "samples", "volume samp.", "CPU s", "render s", "e^2 total",
                         "rel.diff");
             for (double n : counts) {
                 const wang18::PbRun pb = wang18::render_pb(ex, sc, &table, po, int(n), seed,
@@ -62,14 +63,16 @@ int main(int argc, char** argv) {
                 rel.push_back(c.rel[4]);
                 csv.row({double(pb.surface_samples), c.e2[4], c.e2[2], pb.cpu_total(), pb.cpu_render, c.rel[4],
                          double(pb.volume_samples)});
-                std::printf("  %9d %13zu %11.2f %11.2f %11.3e %+9.1f%%\n", pb.surface_samples, pb.volume_samples,
+                if (ex.root()) std::printf("  %9d %13zu %11.2f %11.2f %11.3e %+9.1f%%\n", pb.surface_samples, pb.volume_samples,
                             pb.cpu_total(), pb.cpu_render, c.e2[4], 100 * c.rel[4]);
             }
+            if (!ex.root()) return ex.finish({});  // rank 0 writes and prints
             const auto csv_path = ex.csv("wang18_fig23_surface_samples.csv", csv);
             ex.plot("wang18_sweep", csv_path, out / "wang18_fig23_surface_samples.png",
                     {"light surface samples", "CPU seconds", "Wang18 Fig. 23: time and error vs surface samples", "logx"});
-            std::printf("  [paper Fig. 23: error and time fall until ~66 K samples, then time grows with no gain]\n");
+            if (ex.root()) std::printf("  [paper Fig. 23: error and time fall until ~66 K samples, then time grows with no gain]\n");
             gl_examples::Json j = ex.summary();
+            wang18::put_rank_rows(ex, j, W);
             j.nums("surface_samples", counts).nums("e2_total", e2).nums("seconds", secs).nums("rel_diff_total", rel);
             j.num("e2_first_over_last", e2.back() > 0 ? e2.front() / e2.back() : 0.0)
                 .num("seconds_vpt", vpt.cpu)

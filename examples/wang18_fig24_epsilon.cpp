@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
             const int rays = ex.opt<int>("rays", 4, 4, "camera rays per pixel of the point-based render");
             const int W = ex.opt<int>("width", 16, 64, "image width = height in pixels");
             const double R_opt = ex.opt<double>("radius-mfp", 20.0, "sphere radius in green mean free paths");
+            ex.checkpointable();
             ex.ready();
             wang18::check_vpt_spp(vpt_spp);
             wang18::check_surface_samples(n_surface);
@@ -43,14 +44,14 @@ int main(int argc, char** argv) {
             const wang18::BumpyScene sc = wang18::make_bumpy_scene(W, float(R_opt), 0.7f);
             double cpu_table = 0;
             bool cached = false;
-            const gl::MsTable<3> table = wang18::cached_table(out, sc, full, seed, cpu_table, cached);
+            const gl::MsTable<3> table = wang18::cached_table(out, sc, full, seed, cpu_table, cached, ex.root());
             const wang18::VptRun vpt = wang18::render_vpt(ex, sc, vpt_spp, seed, "fig24 VPT reference");
             gl_examples::Csv csv({"eps1", "e2_total", "e2_double", "e2_multiple", "cost_render_seconds", "rel_diff_total"});
             std::vector<double> e2, secs, rel;
-            std::printf("Wang18 Fig. 24: time and error vs eps1, bumpy sphere mesh, radius %.0f green mfp, g 0.7, %d surface "
+            if (ex.root()) std::printf("Wang18 Fig. 24: time and error vs eps1, bumpy sphere mesh, radius %.0f green mfp, g 0.7, %d surface "
                         "samples, %d x %d pixels, VPT %d spp (%.2f s)\n",
                         R_opt, n_surface, W, W, vpt_spp, vpt.cpu);
-            std::printf("  %7s %11s %11s %11s %10s\n", "eps1", "render s", "samples s", "e^2 total", "rel.diff");
+            if (ex.root()) std::printf("  %7s %11s %11s %11s %10s\n", "eps1", "render s", "samples s", "e^2 total", "rel.diff");
             for (double e : eps) {
                 gl::PointBasedOptions<float> po = wang18::default_options(sc, full);
                 po.cut.eps1 = float(e);
@@ -63,14 +64,16 @@ int main(int argc, char** argv) {
                 secs.push_back(pb.cpu_render);
                 rel.push_back(c.rel[4]);
                 csv.row({e, c.e2[4], c.e2[1], c.e2[2], pb.cpu_render, c.rel[4]});
-                std::printf("  %7.2f %11.2f %11.2f %11.3e %+9.1f%%\n", e, pb.cpu_render, pb.cpu_samples, c.e2[4],
+                if (ex.root()) std::printf("  %7.2f %11.2f %11.2f %11.3e %+9.1f%%\n", e, pb.cpu_render, pb.cpu_samples, c.e2[4],
                             100 * c.rel[4]);
             }
+            if (!ex.root()) return ex.finish({});  // rank 0 writes and prints
             const auto csv_path = ex.csv("wang18_fig24_epsilon.csv", csv);
             ex.plot("wang18_sweep", csv_path, out / "wang18_fig24_epsilon.png",
                     {"eps1 (sr)", "render CPU seconds", "Wang18 Fig. 24: time and error vs eps1", "logx"});
-            std::printf("  [paper Fig. 24 (Wax): time grows and error falls as eps1 decreases; sweet spot eps1 ~ 0.1]\n");
+            if (ex.root()) std::printf("  [paper Fig. 24 (Wax): time grows and error falls as eps1 decreases; sweet spot eps1 ~ 0.1]\n");
             gl_examples::Json j = ex.summary();
+            wang18::put_rank_rows(ex, j, W);
             j.nums("eps1", eps).nums("e2_total", e2).nums("seconds_render", secs).nums("rel_diff_total", rel);
             j.num("seconds_ratio_smallest_over_largest_eps", secs.front() > 0 ? secs.back() / secs.front() : 0.0)
                 .num("seconds_vpt", vpt.cpu)

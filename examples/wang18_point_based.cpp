@@ -24,17 +24,19 @@
 // --bias-study, wang18_point_based_bias_study.csv.
 //
 //   wang18_point_based [--quality quick|full] [--out DIR] [--seed S] [--threads N]
-//                      [--vpt-spp N] [--surface-samples N] [--eps1 E] [--bounce-samples N]
+//                      [--vpt-spp N] [--surface-samples N] [--eps1 E] [--small-eps1 E] [--bounce-samples N]
 //                      [--bounce-generations 1|2] [--bias-study]
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "common/checkpoint.hpp"
 #include "common/harness.hpp"
 #include "grainlight/integrators/point_based.hpp"
 #include "grainlight/integrators/walk.hpp"
@@ -70,7 +72,8 @@ using Renderer = gl::PointBasedRenderer<Phase, gl::SphereShape<float>>;
 struct Params {
     bool full = false;
     int vpt_spp = 512, n_surface = 6000, bounce_generations = 2, bounce_samples = 512;
-    double eps1 = 1.0;  ///< Alg. 1 solid-angle threshold (sr)
+    double eps1 = 0.2;        ///< Alg. 1 solid-angle threshold (sr), thick case (Table 3's 0.2 for BmpS.)
+    double small_eps1 = 1.0;  ///< the same for the small sphere (reported, not bounded)
     std::uint64_t seed = 1;
 };
 
@@ -114,7 +117,7 @@ CaseResult run_case(const gl_examples::Example& ex, const Case& cs, const gl::Ms
     po.camera_bounces = thick ? 0 : (full ? 2 : 1);
     po.light_bounces = thick ? 0 : 2;
     po.max_optical_depth = thick ? 8.0f : 10.0f;
-    po.cut.eps1 = float(prm.eps1);
+    po.cut.eps1 = float(thick ? prm.eps1 : prm.small_eps1);
     po.cut.eps2 = 0.2f * po.cut.eps1;
     po.two_step_depth = 3;
     po.bounce_samples = prm.bounce_samples;
@@ -134,35 +137,39 @@ CaseResult run_case(const gl_examples::Example& ex, const Case& cs, const gl::Ms
     wang18::PbRun pr;
     pr.img.assign(kComp, gl::Image(W, H));
     gl::Image pb_eq7(W, H);
-    // One block per image row; every pixel has its own key, so any thread count gives the same image.
+    // Rows through the render driver (wang18_bumpy.hpp render_rows: checkpoints, rows split over
+    // MPI ranks and gathered on rank 0); every pixel has its own key, so any thread or rank count
+    // gives the same image.
     auto render_pb = [&](bool eq7_only) {
-        (void)ex.parallel<int>(
-            "wang18 " + cs.name + (eq7_only ? " point-based (boundary image)" : " point-based"), std::uint64_t(H), 1,
-            [&](std::uint64_t, std::uint64_t y0, std::uint64_t y1) {
-                for (int y = int(y0); y < int(y1); ++y)
-                    for (int x = 0; x < W; ++x) {
-                        gl::Rng rng = gl::Rng::from_key(seed, std::uint64_t(y) * W + x, 0x10000u);
-                        const gl::Vec2f u = rng.uniform2<float>();
-                        const auto c = pb.radiance_components(camera.generate_ray(float(x) + u.x, float(y) + u.y), rng);
-                        for (int ch = 0; ch < 3; ++ch) {
-                            if (eq7_only) {
-                                pb_eq7.at(x, y, ch) = c.multiple[ch];
-                                continue;
-                            }
-                            pr.img[0].at(x, y, ch) = c.single[ch];
-                            pr.img[1].at(x, y, ch) = c.double_[ch];
-                            pr.img[2].at(x, y, ch) = c.multiple[ch];
-                            pr.img[3].at(x, y, ch) = c.bounced[ch];
-                            pr.img[4].at(x, y, ch) = c.total()[ch];
-                        }
+        const std::string what = eq7_only ? " point-based (boundary image)" : " point-based";
+        const std::vector<gl::Film> f = wang18::render_rows(
+            ex, "wang18 " + cs.name + what, cs.name + what, W, H, eq7_only ? 1 : kComp, 1,
+            [&](int y, std::span<gl::Film> film) {
+                for (int x = 0; x < W; ++x) {
+                    gl::Rng rng = gl::Rng::from_key(seed, std::uint64_t(y) * W + x, 0x10000u);
+                    const gl::Vec2f u = rng.uniform2<float>();
+                    const auto c = pb.radiance_components(camera.generate_ray(float(x) + u.x, float(y) + u.y), rng);
+                    if (eq7_only) {
+                        film[0].add_rgb(x, y, c.multiple[0], c.multiple[1], c.multiple[2]);
+                        continue;
                     }
-                return 0;
-            },
-            [](int&, int) {});
+                    const gl::RGB t = c.total();
+                    film[0].add_rgb(x, y, c.single[0], c.single[1], c.single[2]);
+                    film[1].add_rgb(x, y, c.double_[0], c.double_[1], c.double_[2]);
+                    film[2].add_rgb(x, y, c.multiple[0], c.multiple[1], c.multiple[2]);
+                    film[3].add_rgb(x, y, c.bounced[0], c.bounced[1], c.bounced[2]);
+                    film[4].add_rgb(x, y, t[0], t[1], t[2]);
+                }
+            });
+        if (eq7_only) {
+            pb_eq7 = f[0].image();
+            return;
+        }
+        for (int k = 0; k < kComp; ++k) pr.img[std::size_t(k)] = f[std::size_t(k)].image();
     };
     c0 = cpu_seconds();
     render_pb(false);
-    res.cpu_pb = cpu_seconds() - c0;
+    res.cpu_pb = wang18::sum_over_ranks(ex, cpu_seconds() - c0);
     pr.cpu_samples = res.cpu_samples;
     pr.cpu_render = res.cpu_pb;
     if (study) {
@@ -186,34 +193,10 @@ CaseResult run_case(const gl_examples::Example& ex, const Case& cs, const gl::Ms
     v.W = W;
     v.H = H;
     v.bs.assign(std::size_t(kComp) * kBatches * npx * 3, 0.0);
-    gl::WalkOptions<float> wo;  // no max_depth cap; Russian roulette after 5 events
     c0 = cpu_seconds();
-    (void)ex.parallel<int>(
-        "wang18 " + cs.name + " VPT reference", std::uint64_t(H), 1,
-        [&](std::uint64_t, std::uint64_t y0, std::uint64_t y1) {
-            for (int y = int(y0); y < int(y1); ++y)
-                for (int x = 0; x < W; ++x) {
-                    const std::size_t p = std::size_t(y) * W + x;
-                    for (int ch = 0; ch < 3; ++ch)
-                        for (int s = 0; s < v.spp; ++s) {
-                            gl::Rng rng = gl::Rng::from_key(seed, p, std::uint64_t(s) * 3 + std::uint64_t(ch));
-                            const gl::Vec2f u = rng.uniform2<float>();
-                            SplitVpt cb{scenes[std::size_t(ch)]};
-                            auto st = gl::start_path<float, Grey>(camera.generate_ray(float(x) + u.x, float(y) + u.y), -1);
-                            (void)gl::walk(scenes[std::size_t(ch)], st, rng, cb, wo);
-                            const int b = s % kBatches;
-                            double tot = 0;
-                            for (int k = 0; k < 4; ++k) {
-                                v.bs[v.idx(k, b, p, ch)] += cb.L[std::size_t(k)];
-                                tot += cb.L[std::size_t(k)];
-                            }
-                            v.bs[v.idx(4, b, p, ch)] += tot;
-                        }
-                }
-            return 0;
-        },
-        [](int&, int) {});
-    res.cpu_vpt = cpu_seconds() - c0;
+    wang18::vpt_batches(ex, "wang18 " + cs.name + " VPT reference", W, H, prm.vpt_spp, seed, scenes, camera,
+                        gl::WalkOptions<float>{}, v);  // no max_depth cap; Russian roulette after 5 events
+    res.cpu_vpt = wang18::sum_over_ranks(ex, cpu_seconds() - c0);
     v.cpu = res.cpu_vpt;
 
     // Reference mean images per component.
@@ -234,14 +217,13 @@ CaseResult run_case(const gl_examples::Example& ex, const Case& cs, const gl::Ms
             res.cmp.ref[2] > 0 ? (res.pb_multiple_image - res.cmp.ref[2]) / res.cmp.ref[2] : 0.0;
     }
 
-    if (!study) {
-        const auto& out = ex.out();
+    if (!study) {  // rank 0 only
         const double exposure = thick ? 4.0 : 1.0;
-        wang18::save_image(out, "wang18_" + cs.name + "_point_based", pr.img[4], exposure);
-        wang18::save_image(out, "wang18_" + cs.name + "_vpt", refi[4], exposure);
+        wang18::save_image(ex, "wang18_" + cs.name + "_point_based", pr.img[4], exposure);
+        wang18::save_image(ex, "wang18_" + cs.name + "_vpt", refi[4], exposure);
         for (int k = 0; k < 4; ++k) {
-            wang18::save_image(out, "wang18_" + cs.name + "_pb_" + kCompName[k], pr.img[std::size_t(k)], exposure);
-            wang18::save_image(out, "wang18_" + cs.name + "_vpt_" + kCompName[k], refi[std::size_t(k)], exposure);
+            wang18::save_image(ex, "wang18_" + cs.name + "_pb_" + kCompName[k], pr.img[std::size_t(k)], exposure);
+            wang18::save_image(ex, "wang18_" + cs.name + "_vpt_" + kCompName[k], refi[std::size_t(k)], exposure);
         }
     }
     return res;
@@ -277,13 +259,17 @@ int main(int argc, char** argv) {
             prm.vpt_spp = ex.opt<int>("vpt-spp", 512, 4096, "VPT samples per pixel and channel, multiple of 8");
             prm.n_surface = ex.opt<int>("surface-samples", 6000, 20000,
                                         "light surface samples on the sphere (the thick case uses twice as many at quick)");
-            prm.eps1 = ex.opt<double>("eps1", 1.0, 0.2, "Alg. 1 solid-angle threshold eps1 in sr, in (0, 10]; eps2 = eps1 / 5");
+            prm.eps1 = ex.opt<double>("eps1", 0.2, 0.2,
+                                      "Alg. 1 solid-angle threshold eps1 in sr of the thick case (Table 3: 0.2 for BmpS.), "
+                                      "in (0, 10]; eps2 = eps1 / 5");
+            prm.small_eps1 = ex.opt<double>("small-eps1", 1.0, 0.2, "eps1 of the small sphere, in (0, 10]");
             prm.bounce_samples = ex.opt<int>("bounce-samples", 512, 4096,
                                              "bounce surface samples of Eq. 8, their own Fibonacci lattice (<= 1000000)");
             prm.bounce_generations =
                 ex.opt<int>("bounce-generations", 2, "reflections carried by the bounced term: 1 (Eq. 8 as in the paper) or 2");
             const bool study = ex.opt<bool>(
                 "bias-study", false, "flag: the multiple-scattering bias study (optical radius 2, 5, 20, 50), docs/wang18.md");
+            ex.checkpointable();
             ex.ready();
             prm.full = ex.full();
             prm.seed = ex.seed();
@@ -296,6 +282,8 @@ int main(int argc, char** argv) {
                 throw gl_examples::cli_error("--surface-samples = " + std::to_string(prm.n_surface) + " must be >= 16");
             if (!(prm.eps1 > 0) || prm.eps1 > 10)
                 throw gl_examples::cli_error("--eps1 = " + std::to_string(prm.eps1) + " must be in (0, 10]");
+            if (!(prm.small_eps1 > 0) || prm.small_eps1 > 10)
+                throw gl_examples::cli_error("--small-eps1 = " + std::to_string(prm.small_eps1) + " must be in (0, 10]");
             if (prm.bounce_samples < 1 || prm.bounce_samples > 1000000)
                 throw gl_examples::cli_error("--bounce-samples = " + std::to_string(prm.bounce_samples) +
                                              " must be in [1, 1000000]");
@@ -334,25 +322,26 @@ int main(int argc, char** argv) {
             }
             if (!cached) {
                 table = gl::MsTable<3>::build(Phase(g), albedo, to);
-                table.save(table_path);
+                if (ex.root()) table.save(table_path);
             }
             const double cpu_table = cpu_seconds() - c0;
 
             if (study) {
                 const float radii[4] = {2, 5, 20, 50};
-                std::printf("Multiple-scattering bias study (BmpS., g = 0.7, eta 1.33; multiple = >= 3 events, no "
+                if (ex.root()) std::printf("Multiple-scattering bias study (BmpS., g = 0.7, eta 1.33; multiple = >= 3 events, no "
                             "boundary reflection between events)\n");
-                std::printf("  %8s %12s %12s %14s %16s %12s %10s\n", "R/l_g", "VPT mult.", "s.e.", "Eq. 7 (paper)",
+                if (ex.root()) std::printf("  %8s %12s %12s %14s %16s %12s %10s\n", "R/l_g", "VPT mult.", "s.e.", "Eq. 7 (paper)",
                             "Eq. 7 + image", "total", "bounced");
                 gl_examples::Json j = ex.summary();
                 j.str("study", "bias");
+                wang18::put_rank_rows(ex, j, full ? 96 : 40);
                 gl_examples::Csv csv({"radius_mfp", "vpt_multiple", "rel_se_multiple", "rel_diff_multiple_eq7",
                                       "rel_diff_multiple_image", "rel_diff_total", "bounced_share"});
                 for (float R : radii) {
                     const Case cs{"R" + std::to_string(int(R)), R};
                     const CaseResult r = run_case(ex, cs, table, prm, true);
                     const auto& c = r.cmp;
-                    std::printf("  %8.0f %12.5f %11.1f%% %+13.1f%% %+15.1f%% %+11.1f%% %9.1f%%\n", double(R), c.ref[2],
+                    if (ex.root()) std::printf("  %8.0f %12.5f %11.1f%% %+13.1f%% %+15.1f%% %+11.1f%% %9.1f%%\n", double(R), c.ref[2],
                                 100 * c.rel_se[2], 100 * c.rel[2], 100 * r.rel_multiple_image, 100 * c.rel[4],
                                 100 * c.bounced_share);
                     const std::string p = "R" + std::to_string(int(R)) + "_";
@@ -363,6 +352,7 @@ int main(int argc, char** argv) {
                         .num(p + "bounced_share", c.bounced_share);
                     csv.row({double(R), c.ref[2], c.rel_se[2], c.rel[2], r.rel_multiple_image, c.rel[4], c.bounced_share});
                 }
+                if (!ex.root()) return ex.finish({});
                 (void)ex.csv("wang18_point_based_bias_study.csv", csv);
                 return ex.finish(j);
             }
@@ -370,6 +360,7 @@ int main(int argc, char** argv) {
             const Case thick{"thick", 20.0f}, small{"small", 10.0f / 3.2258f};
             const CaseResult rt = run_case(ex, thick, table, prm, false);
             const CaseResult rs = run_case(ex, small, table, prm, false);
+            if (!ex.root()) return ex.finish({});
             std::printf("MS table %ux%ux%ux%u from %llu particles: %.2f s CPU%s, %.1f MB\n", table.grid().n_rho,
                         table.grid().n_z, table.grid().n_theta, table.grid().n_phi, (unsigned long long)table.photons(),
                         cpu_table, cached ? " (loaded from the cache)" : "", double(table.bytes()) / 1e6);
@@ -386,6 +377,7 @@ int main(int argc, char** argv) {
 
             gl_examples::Json j = ex.summary();
             j.integer("vpt_spp", prm.vpt_spp).integer("surface_samples", prm.n_surface);
+            wang18::put_rank_rows(ex, j, full ? 96 : 40);
             j.num("seconds_table", cpu_table);
             auto put = [&](const std::string& p, const CaseResult& r) {
                 const auto& c = r.cmp;

@@ -28,11 +28,13 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <span>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "common/harness.hpp"
+#include "wang18_bumpy.hpp"
 #include "grainlight/integrators/ms_table_quadtree.hpp"
 #include "grainlight/integrators/point_based.hpp"
 #include "grainlight/integrators/walk.hpp"
@@ -125,7 +127,8 @@ std::string table_key(const Material& m, const gl::MsTableOptions& to) {
     return os.str();
 }
 
-Result run_material(const Material& mat, const Settings& st, std::uint64_t seed, const std::filesystem::path& out) {
+Result run_material(const gl_examples::Example& ex, const Material& mat, const Settings& st, std::uint64_t seed,
+                    const std::filesystem::path& out) {
     Result r;
     const int W = st.W, H = st.W;
     const float sc = st.R_opt * mat.mfp[1];  // sigma_t = R_opt * l_green / l_c on a unit sphere
@@ -176,7 +179,7 @@ Result run_material(const Material& mat, const Settings& st, std::uint64_t seed,
     }
     if (!r.table_cached) {
         table = gl::MsTable<3>::build(Phase(mat.g), mat.albedo, to);
-        table.save(table_path);
+        if (ex.root()) table.save(table_path);
     }
     r.seconds_table = cpu_seconds() - c0;
     r.table_mb = double(table.bytes()) / 1e6;
@@ -223,28 +226,29 @@ Result run_material(const Material& mat, const Settings& st, std::uint64_t seed,
     };
     c0 = cpu_seconds();
     {
-        gl_examples::ProgressBar bar(std::string("wang18 ") + mat.key + " point-based", std::uint64_t(H));
-#if defined(_OPENMP)
-#pragma omp parallel for schedule(dynamic, 1)
-#endif
-        for (int y = 0; y < H; ++y) {
-            for (int x = 0; x < W; ++x) {
-                const std::size_t p = std::size_t(y) * W + x;
-                for (int s = 0; s < st.pb_spp; ++s) {
-                    gl::Rng rng = gl::Rng::from_key(seed, p, 0x10000u + std::uint64_t(s));
-                    const gl::Vec2f u = rng.uniform2<float>();
-                    const int cell = s % (side * side);
-                    const float fx = (float(cell % side) + u.x) / float(side), fy = (float(cell / side) + u.y) / float(side);
-                    const gl::RGB L = pb.radiance(camera.generate_ray(float(x) + fx, float(y) + fy), rng);
-                    const int h = half_of(s);
-                    for (int ch = 0; ch < 3; ++ch) pbh[(std::size_t(h) * npx + p) * 3 + std::size_t(ch)] += L[ch];
+        // Rows through the render driver (wang18_bumpy.hpp: checkpoints, rows split over the MPI
+        // ranks, gathered on rank 0); film h holds the sum of half h's rays.
+        const std::vector<gl::Film> f = wang18::render_rows(
+            ex, std::string("wang18 ") + mat.key + " point-based", std::string(mat.key) + " point-based", W, H, 2,
+            st.pb_spp, [&](int y, std::span<gl::Film> film) {
+                for (int x = 0; x < W; ++x) {
+                    const std::size_t p = std::size_t(y) * W + x;
+                    for (int s = 0; s < st.pb_spp; ++s) {
+                        gl::Rng rng = gl::Rng::from_key(seed, p, 0x10000u + std::uint64_t(s));
+                        const gl::Vec2f u = rng.uniform2<float>();
+                        const int cell = s % (side * side);
+                        const float fx = (float(cell % side) + u.x) / float(side), fy = (float(cell / side) + u.y) / float(side);
+                        const gl::RGB L = pb.radiance(camera.generate_ray(float(x) + fx, float(y) + fy), rng);
+                        film[std::size_t(half_of(s))].add_rgb(x, y, L[0], L[1], L[2]);
+                    }
                 }
-            }
-            bar.advance(1);
+            });
+        for (int h = 0; h < 2; ++h) {
+            const auto sums = f[std::size_t(h)].sums();
+            for (std::size_t i = 0; i < npx * 3; ++i) pbh[std::size_t(h) * npx * 3 + i] = sums[i];
         }
-        bar.done();
     }
-    r.seconds_pb = cpu_seconds() - c0;
+    r.seconds_pb = wang18::sum_over_ranks(ex, cpu_seconds() - c0);
     // Rays per half.
     std::array<int, 2> nh{0, 0};
     for (int s = 0; s < st.pb_spp; ++s) ++nh[std::size_t(half_of(s))];
@@ -276,29 +280,36 @@ Result run_material(const Material& mat, const Settings& st, std::uint64_t seed,
     if (st.vpt_max_depth > 0) wo.max_depth = st.vpt_max_depth;
     c0 = cpu_seconds();
     {
-        gl_examples::ProgressBar bar(std::string("wang18 ") + mat.key + " VPT reference", std::uint64_t(H));
-#if defined(_OPENMP)
-#pragma omp parallel for schedule(dynamic, 1)
-#endif
-        for (int y = 0; y < H; ++y) {
-            for (int x = 0; x < W; ++x) {
-                const std::size_t p = std::size_t(y) * W + x;
-                for (int ch = 0; ch < 3; ++ch)
+        // Films 0..7: batch sums (sample s -> batch s % 8); film 8, channel 0: scattering events.
+        const std::vector<gl::Film> f = wang18::render_rows(
+            ex, std::string("wang18 ") + mat.key + " VPT reference", std::string(mat.key) + " VPT reference", W, H,
+            kBatches + 1, st.vpt_spp, [&](int y, std::span<gl::Film> film) {
+                for (int x = 0; x < W; ++x) {
+                    const std::size_t p = std::size_t(y) * W + x;
                     for (int s = 0; s < st.vpt_spp; ++s) {
-                        gl::Rng rng = gl::Rng::from_key(seed, p, std::uint64_t(s) * 3 + std::uint64_t(ch));
-                        const gl::Vec2f u = rng.uniform2<float>();
-                        ScatteredOnly cb{scenes[std::size_t(ch)]};
-                        auto ps = gl::start_path<float, Grey>(camera.generate_ray(float(x) + u.x, float(y) + u.y), -1);
-                        (void)gl::walk(scenes[std::size_t(ch)], ps, rng, cb, wo);
-                        bs[(std::size_t(s % kBatches) * npx + p) * 3 + std::size_t(ch)] += cb.L;
-                        events[std::size_t(y)] += cb.count;
+                        double L[3] = {0, 0, 0}, count = 0;
+                        for (int ch = 0; ch < 3; ++ch) {
+                            gl::Rng rng = gl::Rng::from_key(seed, p, std::uint64_t(s) * 3 + std::uint64_t(ch));
+                            const gl::Vec2f u = rng.uniform2<float>();
+                            ScatteredOnly cb{scenes[std::size_t(ch)]};
+                            auto ps = gl::start_path<float, Grey>(camera.generate_ray(float(x) + u.x, float(y) + u.y), -1);
+                            (void)gl::walk(scenes[std::size_t(ch)], ps, rng, cb, wo);
+                            L[ch] = cb.L;
+                            count += cb.count;
+                        }
+                        film[std::size_t(s % kBatches)].add_rgb(x, y, L[0], L[1], L[2]);
+                        film[kBatches].add_rgb(x, y, count, 0, 0);
                     }
-            }
-            bar.advance(1);
+                }
+            });
+        for (int b = 0; b < kBatches; ++b) {
+            const auto sums = f[std::size_t(b)].sums();
+            for (std::size_t i = 0; i < npx * 3; ++i) bs[std::size_t(b) * npx * 3 + i] = sums[i];
         }
-        bar.done();
+        const auto ev = f[kBatches].sums();
+        for (std::size_t p = 0; p < npx; ++p) events[p / std::size_t(W)] += ev[3 * p];
     }
-    r.seconds_vpt = cpu_seconds() - c0;
+    r.seconds_vpt = wang18::sum_over_ranks(ex, cpu_seconds() - c0);
     double ev = 0;
     for (double e : events) ev += e;
     r.events_per_path = ev / (double(npx) * 3.0 * st.vpt_spp);
@@ -371,6 +382,7 @@ Result run_material(const Material& mat, const Settings& st, std::uint64_t seed,
             }
         prof.row_text({std::to_string(y), std::to_string(a), std::to_string(b)});
     }
+    if (!ex.root()) return r;  // rank 0 writes
     prof.write(out / (std::string("wang18_table3_") + mat.key + "_profile.csv"));
     const double scale = 1.0 / std::max(1e-6, 4.0 * r.ref_mean);
     gl::write_exr(out / (std::string("wang18_table3_") + mat.key + "_point_based.exr"), pbi);
@@ -401,6 +413,7 @@ int main(int argc, char** argv) {
             st.ms_image_offset = ex.opt<float>("ms-image-offset", 0.0f, "image plane offset in transport mean free paths");
             st.vpt_max_depth = ex.opt<int>("vpt-max-depth", 0, "cap the VPT paths at this many events (0: none; the paper's UPBP reference: 50)");
             st.table_range = ex.opt<float>("table-range", 10.0f, "MS table extent +-range in mean free paths (0: 5 diffusion lengths, at most the sphere)");
+            ex.checkpointable();
             ex.ready();
             if (st.pb_spp < 2 || st.pb_spp > 4096)
                 throw gl_examples::cli_error("--pb-spp must be in [2, 4096], got " + std::to_string(st.pb_spp));
@@ -443,26 +456,26 @@ int main(int argc, char** argv) {
                                   "rel_diff_total", "rel_diff_total_stderr", "vpt_events_per_path"});
             gl_examples::Json jm;
             std::vector<std::pair<std::string, double>> flat;  // top-level copies for the ctest checker
-            std::printf("Wang18 Table 3 materials in a smooth glass sphere (eta 1.33) of radius %.0f green mean free "
+            if (ex.root()) std::printf("Wang18 Table 3 materials in a smooth glass sphere (eta 1.33) of radius %.0f green mean free "
                         "paths, %dx%d pixels, point-based %d rays/pixel, VPT %d spp x 3 channels\n",
                         double(st.R_opt), st.W, st.W, st.pb_spp, st.vpt_spp);
-            std::printf("  %-6s %8s %8s %8s %9s %9s %10s %10s %8s %9s %8s %14s %9s\n", "mat.", "pb [s]", "VPT [s]",
+            if (ex.root()) std::printf("  %-6s %8s %8s %8s %9s %9s %10s %10s %8s %9s %8s %14s %9s\n", "mat.", "pb [s]", "VPT [s]",
                         "mem MB", "(T2: MB)", "events", "e^2", "pb noise", "speedup", "(T3: x)", "T3 MSE",
                         "bias", "table [s]");
             for (const Material* m : run) {
-                const Result r = run_material(*m, st, ex.seed(), ex.out());
+                const Result r = run_material(ex, *m, st, ex.seed(), ex.out());
                 const double mem = r.table_mb + r.samples_mb;
-                std::printf("  %-6s %8.2f %8.2f %8.1f %9.1f %9.1f %10.2e %10.2e %7.2fx %8.0fx %8.1e %+6.1f+-%4.1f%% "
+                if (ex.root()) std::printf("  %-6s %8.2f %8.2f %8.1f %9.1f %9.1f %10.2e %10.2e %7.2fx %8.0fx %8.1e %+6.1f+-%4.1f%% "
                             "%7.2f%s\n",
                             m->name, r.seconds_samples + r.seconds_pb, r.seconds_vpt, mem, m->paper_table_mb,
                             r.events_per_path, r.e2, r.pb_noise, r.speedup, m->paper_ratio(), m->paper_mse,
                             100 * r.rel, 100 * r.rel_se, r.seconds_table, r.table_cached ? " (cached)" : "");
-                std::printf("         e^2 = %.3e +- %.1e (MSE %.3e - reference variance of the mean %.3e; point-based "
+                if (ex.root()) std::printf("         e^2 = %.3e +- %.1e (MSE %.3e - reference variance of the mean %.3e; point-based "
                             "noise %.2e, so bias^2 ~ %.2e); VPT variance/sample %.3e (halves %.2f); %zu volume samples "
                             "(%.1f MB) + table %.1f MB\n",
                             r.e2, r.e2_se, r.mse, r.ref_var_mean, r.pb_noise, r.e2 - r.pb_noise, r.var_ps,
                             r.half_ratio, r.volume_samples, r.samples_mb, r.table_mb);
-                std::printf("         table: dense %.1f MB, quadtree over empty regions %.1f MB (lossless), %.1f MB "
+                if (ex.root()) std::printf("         table: dense %.1f MB, quadtree over empty regions %.1f MB (lossless), %.1f MB "
                             "(cells < 1e-4 of the peak dropped)   [Table 2: %.1f MB compressed, 8.4 GB dense]\n",
                             r.table_mb, r.table_qt_mb, r.table_qt_lossy_mb, m->paper_table_mb);
                 csv.row_text({m->key, std::to_string(r.seconds_table), std::to_string(r.seconds_samples),
@@ -504,9 +517,11 @@ int main(int argc, char** argv) {
                 flat.push_back({std::string(m->key) + "_seconds_vpt", r.seconds_vpt});
                 flat.push_back({std::string(m->key) + "_memory_mb", mem});
             }
+            if (!ex.root()) return ex.finish({});  // rank 0 writes and prints
             const auto csv_path = ex.csv("wang18_table3_materials.csv", csv);
             ex.plot("wang18_table3_materials", csv_path, ex.out() / "wang18_table3_materials.png");
             auto j = ex.summary();
+            wang18::put_rank_rows(ex, j, st.W);
             j.integer("pb_spp", st.pb_spp).integer("vpt_spp", st.vpt_spp).integer("width", st.W);
             j.raw("materials", jm.str());
             for (const auto& [k, v] : flat) j.num(k, v);
