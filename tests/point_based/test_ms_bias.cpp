@@ -8,7 +8,9 @@
 //      the light the boundary removes (the "boundary share") shrinks with R;
 //  (c) the tree-cut aggregation of Eq. 7 against the brute-force sum over every volume sample;
 //  (d) Eq. 8 through the surface samples' tree cut against the brute-force sum over every
-//      surface sample written out here.
+//      surface sample written out here;
+//  (e) Eq. 8 next to a bounce sample (ring quadrature) against a fine integral over the disks;
+//  (f) the cuts' culling beyond the kernels' reach against the same cuts without it.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -249,4 +251,62 @@ TEST_CASE("ms_bias (e): Eq. 8 next to a bounce sample, ring quadrature over the 
         ++checked;
     }
     CHECK(checked >= 2);
+}
+
+TEST_CASE("ms_bias (f): culling the tree cuts beyond the kernels' reach changes nothing that is not below e^-30",
+          "[ms_bias]") {
+    // A unit sphere of optical radius 40 (sigma_t = 40): the table's grid (+-6 mean free paths,
+    // reach sqrt(72) = 8.5 mfp) and the e^-30 reach of Eqs. 6 and 8 (0.75 scene units) are both
+    // well inside it, so the cut from a receiver on the far side skips most of the tree.
+    MsTableOptions t;
+    t.n_rho = 16;
+    t.n_z = 32;
+    t.n_theta = 8;
+    t.n_phi = 4;
+    t.rho_max = 6;
+    t.z_min = -6;
+    t.z_max = 6;
+    t.photons = 20000;
+    const auto table = MsTable<1>::build(Phase(kG), Grey(kAlbedo), t);
+    const MediumT m(40.0f, kAlbedo, Phase(kG));
+    PointBasedOptions<float> o;
+    o.volume_step = 0.01f;
+    o.light_samples = 1;
+    o.light_bounces = 0;
+    o.max_optical_depth = 12;
+    o.bounce_samples = 200;
+    o.bounce_rays = 2;
+    o.bounce_k_max = 2;
+    o.bounce_generations = 1;
+    o.cut = CutCriterion<float>{0.2f, 0.04f, pi_v<float> / 4};
+    o.two_step_depth = 3;
+    auto make = [&](float cull) {
+        PointBasedOptions<float> oc = o;
+        oc.cull_optical_distance = cull;
+        Rng rng = Rng::from_key(12);
+        return Renderer(m, kEta, sphere(), sphere_surface_samples(sphere(), 800),
+                        Light<float, Grey>::quad_light(quad(), Grey(1.0f)), oc, rng, &table);
+    };
+    const Renderer culled = make(30.0f), full = make(0.0f);
+    REQUIRE(culled.volume_sample_count() == full.volume_sample_count());
+    const Vec3f omega = glm::normalize(Vec3f(0.1f, -0.3f, -1.0f));
+    int nonzero = 0;
+    // Receivers: under the lit top (in reach of the samples) and on the far side (out of reach).
+    for (const Vec3f P : {Vec3f(0.0f, 0.95f, 0.05f), Vec3f(0.2f, 0.9f, -0.1f), Vec3f(0.0f, 0.5f, 0.0f),
+                          Vec3f(0.0f, -0.9f, 0.2f)}) {
+        Grey d0(0.0f), m0(0.0f), d1(0.0f), m1(0.0f);
+        full.gather_point(P, omega, d0, m0);
+        culled.gather_point(P, omega, d1, m1);
+        const Grey b0 = full.gather_bounced(P, omega), b1 = culled.gather_bounced(P, omega);
+        std::printf("ms_bias (f) at y = %.2f: multiple %.6g vs %.6g, double %.6g vs %.6g, bounced %.6g vs %.6g\n",
+                    double(P.y), m1[0], m0[0], d1[0], d0[0], b1[0], b0[0]);
+        nonzero += m0[0] > 0 ? 1 : 0;
+        // The table is 0 beyond its grid: the same multiple term. Eqs. 6 and 8 lose only terms below
+        // e^-30 of a sample's weight: the same to 1e-5, or below 1e-12 where the receiver is out of
+        // reach (the near receivers' terms are ~0.1-1).
+        CHECK(m1[0] == Approx(m0[0]).epsilon(1e-5));
+        CHECK(std::abs(d1[0] - d0[0]) <= 1e-5 * std::abs(d0[0]) + 1e-12);
+        CHECK(std::abs(b1[0] - b0[0]) <= 1e-5 * std::abs(b0[0]) + 1e-12);
+    }
+    CHECK(nonzero >= 2);  // the comparison is not between zeros only
 }
