@@ -24,7 +24,6 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <filesystem>
 #include <span>
 #include <string>
@@ -115,24 +114,12 @@ template <class RowFn>
 
 /// Sum of `x` over the MPI ranks, on rank 0 (CPU seconds of a split render); `x` elsewhere.
 [[nodiscard]] inline double sum_over_ranks(const gl_examples::Example& ex, double x) {
-    if (ex.ranks() == 1) return x;
-    std::vector<unsigned char> mine(sizeof(double));
-    std::memcpy(mine.data(), &x, sizeof(double));
-    const auto all = ex.mpi().gather_bytes(mine);
-    if (!ex.root()) return x;
-    double s = 0;
-    for (const auto& b : all) {
-        double v = 0;
-        std::memcpy(&v, b.data(), sizeof(double));
-        s += v;
-    }
-    return s;
+    return ex.mpi().sum_to_root({x})[0];
 }
 
 /// Rows of each rank for the JSON summaries ("rank_rows", "rank_row_counts").
 inline void put_rank_rows(const gl_examples::Example& ex, gl_examples::Json& j, int H) {
-    std::vector<double> rows;
-    for (int r = 0; r < ex.ranks(); ++r) rows.push_back(double((H - r + ex.ranks() - 1) / ex.ranks()));
+    const std::vector<double> rows = ex.mpi().row_counts(H);
     j.str("rank_rows", "rank r renders the rows y with y % ranks == r of every camera-ray and reference render; "
                        "the light samples are built on every rank (deterministic)")
         .nums("rank_row_counts", rows);
