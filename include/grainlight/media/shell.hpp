@@ -124,19 +124,33 @@ inline void shell_exit_from_coords(const Vec3<F>& x, const Vec3<F>& omega, F r, 
     w_out = glm::normalize(d.x * e1 + d.y * e2 + z * n);
 }
 
+/// How the n_c cells of a shell table divide cos theta_1 in [-1, 1].
+enum class ShellCosCells : std::int32_t {
+    /// Equal widths in cos theta_1 (SHEL v1 tables): the forward cell spans theta_1 up to
+    /// acos(1 - 2 / n_c) (23.6 deg at n_c = 24), wider than the forward peak of small shells in
+    /// strongly forward-scattering media.
+    uniform_cos = 0,
+    /// Equal widths in theta_1 (edges cos(pi j / n_c)): 180 / n_c deg everywhere, so the forward
+    /// peak is resolved with the same number of cells (the default of build_shell_table).
+    uniform_angle = 1
+};
+
 /// The factored shell transport table of Moon07 (see the file comment). Plain data; `validate`
-/// checks every invariant, `save`/`load` use the grainlight container (kind SHEL v1).
+/// checks every invariant, `save`/`load` use the grainlight container (kind SHEL v2; v1 files,
+/// which have equal cos theta_1 cells, still load).
 struct ShellTable {
     /// Container kind of a saved table ("SHEL").
     static constexpr std::uint32_t file_kind = fourcc("SHEL");
-    /// Container version of the saved layout (1), checked by load.
-    static constexpr std::uint32_t file_kind_version = 1;
+    /// Container version of the saved layout (2: v1 + the cos-cell layout), checked by load.
+    static constexpr std::uint32_t file_kind_version = 2;
 
     std::vector<double> radii;          ///< shell radii r_i, strictly ascending, > 0
     std::int32_t n_c = 0;               ///< cells in cos theta_1 over [-1, 1]
     std::int32_t n_u = 0;               ///< cells in omega'_u over [0, 1]
     std::int32_t n_v = 0;               ///< cells in omega'_v over [0, 1]
     std::int32_t rank = 0;              ///< number of NMF terms
+    /// How the n_c cells divide cos theta_1 (the density is constant per unit cos theta_1 inside a cell).
+    ShellCosCells cos_cells = ShellCosCells::uniform_cos;
     std::vector<double> p_unscattered;  ///< per shell: P(reach r_i with no event) = f_a(r_i)
     std::vector<double> p_scattered;    ///< per shell: P(first exit after >= 1 event)
     std::vector<double> p_absorbed;     ///< per shell: P(absorbed before the exit)
@@ -151,6 +165,30 @@ struct ShellTable {
     /// Number of direction cells n_u n_v (columns of H).
     [[nodiscard]] std::size_t n_dir() const noexcept { return std::size_t(n_u) * std::size_t(n_v); }
 
+    /// Coordinate in [0, 1] (cell j covers [j / n_c, (j + 1) / n_c)) of cos theta_1 under the
+    /// table's cell layout; 1 is straight ahead.
+    [[nodiscard]] static double cos_cell_coordinate(ShellCosCells layout, double cos_theta1) noexcept {
+        const double c = std::clamp(cos_theta1, -1.0, 1.0);
+        return layout == ShellCosCells::uniform_angle ? 1.0 - std::acos(c) / pi_v<double> : 0.5 * (c + 1.0);
+    }
+    /// cos theta_1 at cell coordinate t in [0, 1] (inverse of cos_cell_coordinate).
+    [[nodiscard]] static double cos_from_cell_coordinate(ShellCosCells layout, double t) noexcept {
+        t = std::clamp(t, 0.0, 1.0);
+        return layout == ShellCosCells::uniform_angle ? -std::cos(pi_v<double> * t) : 2.0 * t - 1.0;
+    }
+    /// cos theta_1 at the lower edge of cos cell j in [0, n_c] (edge n_c is +1).
+    [[nodiscard]] double cos_cell_edge(int j) const noexcept {
+        if (j <= 0) return -1.0;
+        if (j >= n_c) return 1.0;
+        return cos_from_cell_coordinate(cos_cells, double(j) / double(n_c));
+    }
+    /// Index of the cos cell holding cos theta_1.
+    [[nodiscard]] std::size_t cos_cell(double cos_theta1) const noexcept {
+        const double t = cos_cell_coordinate(cos_cells, cos_theta1);
+        if (!(t > 0)) return 0;
+        return std::min(std::size_t(n_c) - 1, std::size_t(t * double(n_c)));
+    }
+
     /// Throws grainlight::invalid_argument naming the first violated invariant.
     void validate() const {
         constexpr const char* where = "ShellTable";
@@ -163,6 +201,8 @@ struct ShellTable {
         check_argument(n_u >= 1 && n_u <= 4096, where, "n_u", n_u, "[1, 4096]");
         check_argument(n_v >= 1 && n_v <= 4096, where, "n_v", n_v, "[1, 4096]");
         check_argument(rank >= 1 && rank <= 1024, where, "rank", rank, "[1, 1024]");
+        check_argument(cos_cells == ShellCosCells::uniform_cos || cos_cells == ShellCosCells::uniform_angle, where,
+                       "cos_cells", std::int32_t(cos_cells), "0 (uniform_cos) or 1 (uniform_angle)");
         const std::size_t ns = n_shells();
         check_argument(p_unscattered.size() == ns && p_scattered.size() == ns && p_absorbed.size() == ns, where,
                        "probability arrays size", p_scattered.size(), "== number of shells");
@@ -192,8 +232,9 @@ struct ShellTable {
                            "fa[" + std::to_string(j) + "]", fa[j], "[0, 1], non-increasing");
     }
 
-    /// Serialize (layout: u32 n_shells, i32 n_c, n_u, n_v, rank, u64 n_paths, f64 fa_d_max,
-    /// u64 fa size, then f64 arrays radii, p_unscattered, p_scattered, p_absorbed, W, H, fa).
+    /// Serialize (layout v2: u32 n_shells, i32 n_c, n_u, n_v, rank, cos_cells, u64 n_paths, f64
+    /// fa_d_max, u64 fa size, then f64 arrays radii, p_unscattered, p_scattered, p_absorbed, W, H,
+    /// fa; v1 had no cos_cells field and equal cos cells).
     [[nodiscard]] std::vector<unsigned char> to_payload() const {
         validate();
         ByteWriter w;
@@ -202,6 +243,7 @@ struct ShellTable {
         w.put(n_u);
         w.put(n_v);
         w.put(rank);
+        w.put(std::int32_t(cos_cells));
         w.put(n_paths);
         w.put(fa_d_max);
         w.put(std::uint64_t(fa.size()));
@@ -210,9 +252,11 @@ struct ShellTable {
         return w.take();
     }
 
-    /// Parse and validate a payload; grainlight::format_error on any malformed content.
+    /// Parse and validate a payload (layout `version` 2, or 1: equal cos cells);
+    /// grainlight::format_error on any malformed content.
     [[nodiscard]] static ShellTable from_payload(const std::vector<unsigned char>& payload,
-                                                 const std::string& context = "shell table") {
+                                                 const std::string& context = "shell table",
+                                                 std::uint32_t version = file_kind_version) {
         ByteReader r(payload, context);
         ShellTable t;
         const auto ns = r.get<std::uint32_t>();
@@ -220,6 +264,11 @@ struct ShellTable {
         t.n_u = r.get<std::int32_t>();
         t.n_v = r.get<std::int32_t>();
         t.rank = r.get<std::int32_t>();
+        if (version >= 2) {
+            const auto layout = r.get<std::int32_t>();
+            if (layout != 0 && layout != 1) r.fail("unknown cos-cell layout " + std::to_string(layout));
+            t.cos_cells = ShellCosCells(layout);
+        }
         t.n_paths = r.get<std::uint64_t>();
         t.fa_d_max = r.get<double>();
         const auto nfa = r.get<std::uint64_t>();
@@ -251,9 +300,26 @@ struct ShellTable {
     void save(const std::filesystem::path& path) const {
         write_container_atomic(path, file_kind, file_kind_version, to_payload());
     }
-    /// Load a table; format_error on truncated/corrupt/wrong-kind files, io_error if unreadable.
+    /// Load a table (SHEL v2, or v1 with equal cos cells); format_error on truncated/corrupt/
+    /// wrong-kind files, io_error if unreadable.
     [[nodiscard]] static ShellTable load(const std::filesystem::path& path) {
-        return from_payload(read_container(path, file_kind, file_kind_version), "shell table '" + path.string() + "'");
+        const std::string context = "shell table '" + path.string() + "'";
+#if GRAINLIGHT_HAS_EXCEPTIONS
+        try {
+            return from_payload(read_container(path, file_kind, file_kind_version), context);
+        } catch (const format_error& e) {
+            // A v1 file (equal cos cells): only if the container says exactly that.
+            std::vector<unsigned char> v1;
+            try {
+                v1 = read_container(path, file_kind, 1);
+            } catch (const format_error&) {
+                throw e;
+            }
+            return from_payload(v1, context, 1);
+        }
+#else
+        return from_payload(read_container(path, file_kind, file_kind_version), context);
+#endif
     }
 };
 
@@ -387,10 +453,10 @@ public:
     /// including their probability p_scattered): Moon07 Sec. 4.3's p_r(y = x_l).
     [[nodiscard]] F exit_position_density(int i, F cos_theta1) const noexcept {
         const std::size_t nc = std::size_t(t_.n_c);
-        const std::size_t j = cell(cos_theta1 * F(0.5) + F(0.5), nc);
+        const std::size_t j = t_.cos_cell(double(cos_theta1));
         const double m = shell_mass_[std::size_t(i)];
         if (!(m > 0)) return F(0);
-        const F dc = F(2) / F(nc);
+        const F dc = F(t_.cos_cell_edge(int(j) + 1) - t_.cos_cell_edge(int(j)));  // cell width in cos theta_1
         const F r = F(t_.radii[std::size_t(i)]);
         return F(t_.p_scattered[std::size_t(i)] * row_mass_[std::size_t(i) * nc + j] / m) /
                (dc * F(2) * pi_v<F> * r * r);
@@ -400,7 +466,7 @@ public:
     /// angle about the shell normal (Moon07 Sec. 4.3's p_r(omega_l | x_{i+1})).
     [[nodiscard]] F exit_direction_density(int i, const ShellCoords<F>& c) const noexcept {
         const std::size_t nc = std::size_t(t_.n_c), K = std::size_t(t_.rank), nd = t_.n_dir();
-        const std::size_t row = std::size_t(i) * nc + cell(c.cos_theta1 * F(0.5) + F(0.5), nc);
+        const std::size_t row = std::size_t(i) * nc + t_.cos_cell(double(c.cos_theta1));
         const double m = row_mass_[row];
         if (!(m > 0)) return F(0);
         const std::size_t q = cell(c.v, std::size_t(t_.n_v)) * std::size_t(t_.n_u) + cell(c.u, std::size_t(t_.n_u));
@@ -420,7 +486,9 @@ public:
         const std::size_t k = term_dist_[row].sample(double(rng.uniform<F>()));
         const std::size_t q = h_dist_[k].sample(double(rng.uniform<F>()));
         ShellCoords<F> c;
-        c.cos_theta1 = std::clamp(F(-1) + (F(j) + rng.uniform<F>()) * F(2) / F(nc), F(-1), F(1));
+        // uniform in cos theta_1 inside the cell (the density is constant per unit area there)
+        const F c_lo = F(t_.cos_cell_edge(int(j))), c_hi = F(t_.cos_cell_edge(int(j) + 1));
+        c.cos_theta1 = std::clamp(c_lo + rng.uniform<F>() * (c_hi - c_lo), F(-1), F(1));
         c.u = (F(q % nu) + rng.uniform<F>()) / F(nu);
         c.v = (F(q / nu) + rng.uniform<F>()) / F(nv);
         const F phi = F(2) * pi_v<F> * rng.uniform<F>();
@@ -437,7 +505,7 @@ public:
         const std::size_t nc = std::size_t(t_.n_c), nu = std::size_t(t_.n_u), nv = std::size_t(t_.n_v);
         const Vec3<F> n = glm::normalize(y - x);
         const F c1 = std::clamp(glm::dot(n, omega), F(-1), F(1));
-        const std::size_t row = std::size_t(i) * nc + cell(c1 * F(0.5) + F(0.5), nc);
+        const std::size_t row = std::size_t(i) * nc + t_.cos_cell(double(c1));
         dir_pdf = F(0);
         if (!(row_mass_[row] > 0)) return n;
         const std::size_t k = term_dist_[row].sample(double(rng.uniform<F>()));
