@@ -15,12 +15,14 @@
 #include <cmath>
 #include <cstdint>
 #include <cctype>
+#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <iostream>
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "common/checkpoint.hpp"
@@ -471,7 +473,7 @@ template <class SceneT, class Camera>
 }
 
 /// A shell table cached on disk: loaded from `path` when it exists (unless `rebuild`), else built
-/// from the samples `sample()` returns (build_shell_table with `bo`) and saved there.
+/// from the samples `sample()` returns (build_shell_table with `bo`) and saved there (if `save`).
 struct CachedShellTable {
     gl::ShellTable table;
     double build_seconds = 0;   ///< CPU seconds to load or build it
@@ -482,17 +484,22 @@ struct CachedShellTable {
 };
 template <class Sample>
 [[nodiscard]] CachedShellTable cached_shell_table(const std::filesystem::path& path, bool rebuild,
-                                                  const gl::ShellBuildOptions& bo, Sample&& sample) {
+                                                  const gl::ShellBuildOptions& bo, Sample&& sample, bool save = true) {
     CachedShellTable c;
     const double b0 = cpu_seconds();
     if (!rebuild && std::filesystem::exists(path)) {
         c.table = gl::ShellTable::load(path);
         c.cached = true;
-    } else {
+        // A table cached with another grid or cos-cell layout (e.g. SHEL v1, equal cos cells) is stale.
+        if (c.table.n_c != bo.n_c || c.table.n_u != bo.n_u || c.table.n_v != bo.n_v || c.table.rank != bo.rank ||
+            c.table.cos_cells != bo.cos_cells)
+            c.cached = false;
+    }
+    if (!c.cached) {
         gl::ShellBuildResult built = gl::build_shell_table(sample(), bo);
         c.nmf_error = built.nmf_relative_error;
         c.table = std::move(built.table);
-        c.table.save(path);
+        if (save) c.table.save(path);  // MPI: every rank builds the same table, rank 0 saves it
     }
     c.build_seconds = cpu_seconds() - b0;
     c.raw_bytes = double(c.table.n_shells()) * bo.n_c * bo.n_u * bo.n_v * sizeof(float);
@@ -515,6 +522,7 @@ struct ShellSceneOptions {
     bool no_nee = false;              ///< high order without Fig. 6's shadow rays
     std::string exit_rule = "table";  ///< radial (Moon07) or table
     bool hand_back = false;           ///< explicit tracing within r_0 of the faces
+    std::string cos_cells = "angle";  ///< cos theta_1 cells of the shell table: angle (equal theta_1) or cos
 
     static ShellSceneOptions declare(gl_examples::Example& ex, const std::string& volume) {
         ShellSceneOptions o;
@@ -531,6 +539,9 @@ struct ShellSceneOptions {
         o.exit_rule = ex.opt<std::string>(
             "exit-rule", "table",
             "exits outside the " + volume + ": radial (Moon07: along y - x) or table (along the sampled T_r direction)");
+        o.cos_cells = ex.opt<std::string>(
+            "cos-cells", "angle",
+            "shell table cells in cos theta_1: angle (equal widths in theta_1, resolves the forward peak) or cos (equal widths in cos theta_1, the tables before)");
         o.hand_back = ex.opt<bool>(
             "hand-back", false,
             "high order: shells only where they fit, explicit tracing within r_0 of the faces (no exit rule, no shadow rays)");
@@ -547,9 +558,15 @@ struct ShellSceneOptions {
         if (hand_back) to.hand_back_depth = shell_r0 * R;
         return to;
     }
+    /// The shell table's cos theta_1 cell layout (--cos-cells).
+    [[nodiscard]] gl::ShellCosCells cos_layout() const {
+        return cos_cells == "cos" ? gl::ShellCosCells::uniform_cos : gl::ShellCosCells::uniform_angle;
+    }
     /// Throws cli_error naming the option, the value and the valid range.
     void check() const {
         using gl_examples::cli_error;
+        if (cos_cells != "angle" && cos_cells != "cos")
+            throw cli_error("--cos-cells = " + cos_cells + " must be angle or cos");
         if (spp_low < 1 || spp_high < 1)
             throw cli_error("--spp-low = " + std::to_string(spp_low) + ", --spp-high = " + std::to_string(spp_high) +
                             " must be >= 1");
@@ -666,10 +683,42 @@ inline ShellVsPt compare_shells_to_pt(const BatchImages& pt, const BatchImages& 
     return r;
 }
 
-/// Where a batch render gets its checkpoint and progress bar: the harness Example
-/// (checkpoint_for, ex.progress), or none (no checkpoint, a plain progress bar).
+/// The element-wise sum of `v` over the MPI ranks of `mpi`, added in rank order on rank 0 (so the
+/// result does not depend on timing); the other ranks get their own `v` back. One rank: `v`.
+/// (CPU seconds and tallies of renders whose rows are split over the ranks.)
+template <class T>
+[[nodiscard]] std::vector<T> gather_sum(const gl_examples::MpiSession& mpi, const std::vector<T>& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    if (mpi.size() == 1) return v;
+    std::vector<unsigned char> mine(v.size() * sizeof(T));
+    if (!v.empty()) std::memcpy(mine.data(), v.data(), mine.size());
+    const auto all = mpi.gather_bytes(mine);
+    if (!mpi.root()) return v;
+    std::vector<T> sum(v.size(), T(0));
+    for (const auto& bytes : all) {
+        if (bytes.size() != mine.size()) throw std::runtime_error("gather_sum: ranks sent different sizes");
+        for (std::size_t i = 0; i < v.size(); ++i) {
+            T x;
+            std::memcpy(&x, bytes.data() + i * sizeof(T), sizeof(T));
+            sum[i] += x;
+        }
+    }
+    return sum;
+}
+
+/// Rows of an H-row image each rank renders (rank r: the rows y with y % ranks == r), for the
+/// JSON summaries' "rank_row_counts".
+[[nodiscard]] inline std::vector<double> rank_row_counts(const gl_examples::Example& ex, int H) {
+    std::vector<double> rows;
+    for (int r = 0; r < ex.ranks(); ++r) rows.push_back(double((H - r + ex.ranks() - 1) / ex.ranks()));
+    return rows;
+}
+
+/// Where a batch render gets its checkpoint, progress bar and row share: the harness Example
+/// (checkpoint_for, ex.progress, rows y % ranks == rank gathered on rank 0), or none (no
+/// checkpoint, a plain progress bar, every row).
 struct BatchHooks {
-    const gl_examples::Example* ex = nullptr;  ///< harness example (checkpoint_for, progress)
+    const gl_examples::Example* ex = nullptr;  ///< harness example (checkpoint_for, progress, MPI)
     [[nodiscard]] gl::CheckpointOptions checkpoint(const std::string& stem) const {
         return ex ? gl_examples::checkpoint_for(*ex, stem) : gl::CheckpointOptions{};
     }
@@ -686,23 +735,33 @@ BatchImages render_batches(const gl::PinholeCamera<double>& cam, int spp, int B,
     out.H = cam.height();
     out.B = B;
     auto bar = hooks.progress(label, std::uint64_t(B) * std::uint64_t(cam.height()));
-    const double c0 = cpu_seconds();
+    double cpu = 0;  // this rank's render time (the gathers' waiting is not counted)
     for (int b = 0; b < B; ++b) {
         gl::RenderOptions ro;
         ro.spp = spp;
         ro.seed = seed * 1000003u + std::uint64_t(b);
         ro.threads = threads;
+        if (hooks.ex) {  // MPI: this rank's rows (y % ranks == rank), gathered on rank 0 below
+            ro.row_offset = hooks.ex->rank();
+            ro.row_stride = hooks.ex->ranks();
+        }
         ro.checkpoint = hooks.checkpoint(label + ".b" + std::to_string(b));
-        const gl::Film film = gl::render_image(
+        const double c0 = cpu_seconds();
+        gl::Film film = gl::render_image(
             cam, [&](const gl::Ray<double>& r, gl::Rng& rng) { return S1(fn(r, rng)); }, ro,
             [&](int n) { bar.advance(std::uint64_t(n)); });
-        std::vector<double> v(std::size_t(out.W) * std::size_t(out.H));
-        for (int y = 0; y < out.H; ++y)
-            for (int x = 0; x < out.W; ++x) v[std::size_t(y) * std::size_t(out.W) + std::size_t(x)] = film.value(x, y, 0);
+        cpu += cpu_seconds() - c0;
+        if (hooks.ex) film = hooks.ex->mpi().gather_film_rows(film);  // rank 0: every row; others: empty
+        std::vector<double> v;
+        if (film.width() == out.W && film.height() == out.H) {
+            v.resize(std::size_t(out.W) * std::size_t(out.H));
+            for (int y = 0; y < out.H; ++y)
+                for (int x = 0; x < out.W; ++x) v[std::size_t(y) * std::size_t(out.W) + std::size_t(x)] = film.value(x, y, 0);
+        }
         out.img.push_back(std::move(v));
     }
     bar.done();
-    out.cpu = cpu_seconds() - c0;
+    out.cpu = hooks.ex ? gather_sum(hooks.ex->mpi(), std::vector<double>{cpu})[0] : cpu;  // CPU s of all ranks
     return out;
 }
 
@@ -754,11 +813,25 @@ ShellPasses render_shell_passes(const gl::PinholeCamera<double>& cam, int spp_pt
         p.ts.exits += t.exits;
         p.ts.straight_escapes += t.straight_escapes;
     }
+    if (hooks.ex) {  // every rank's tallies, summed on rank 0
+        const std::vector<std::uint64_t> all = gather_sum(
+            hooks.ex->mpi(), std::vector<std::uint64_t>{p.ts.paths, p.ts.steps, p.ts.scattered, p.ts.exits,
+                                                        p.ts.straight_escapes});
+        p.ts.paths = all[0];
+        p.ts.steps = all[1];
+        p.ts.scattered = all[2];
+        p.ts.exits = all[3];
+        p.ts.straight_escapes = all[4];
+    }
     return p;
 }
 
 /// As above for a harness example: its seed and threads, checkpoint_for(ex, ...) per batch
-/// render (removed by ex.finish()), progress bars through ex.progress.
+/// render (removed by ex.finish(); one file per rank under MPI), progress bars through
+/// ex.progress, and under MPI (`mpirun -np K`) rank r renders the rows y % K == r of every batch,
+/// gathered on rank 0 (the images there are byte-identical to one process's; the other ranks'
+/// BatchImages hold empty images: they should return ex.finish({}) after this call); CPU
+/// seconds and shell-step tallies are summed over the ranks.
 template <class Radiance>
 ShellPasses render_shell_passes(const gl_examples::Example& ex, const gl::PinholeCamera<double>& cam, int spp_pt,
                                 int spp_low, int spp_high, int B, const std::string& tag, Radiance&& radiance) {

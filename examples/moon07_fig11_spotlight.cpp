@@ -91,6 +91,7 @@ int main(int argc, char** argv) {
         bo.n_u = full ? 50 : 16;
         bo.n_v = full ? 25 : 16;
         bo.rank = 5;
+        bo.cos_cells = so.cos_layout();
         const std::string key = std::to_string(n_spheres) + "_" + std::to_string(int(fraction * 1000)) + "_" +
                                 std::to_string(so.shell_paths) + "_" + std::to_string(so.n_radii) + "_" +
                                 std::to_string(bo.n_c) + "x" + std::to_string(bo.n_u) + "x" + std::to_string(bo.n_v) +
@@ -99,7 +100,7 @@ int main(int argc, char** argv) {
         const CachedShellTable ct = cached_shell_table(table_path, so.rebuild_table, bo, [&] {
             const gl::SpherePackingShellSource src(rsa, 1.5, 0.0, 20 * R);
             return gl::collect_shell_samples(src, radii, so.shell_paths, seed ^ 0x9u);
-        });
+        }, ex.root());  // MPI: rank 0 saves the table
         const gl::ShellTable& table = ct.table;
         const double build_seconds = ct.build_seconds, nmf_error = ct.nmf_error, raw_bytes = ct.raw_bytes,
                      factored_bytes = ct.factored_bytes;
@@ -140,6 +141,7 @@ int main(int argc, char** argv) {
             [&](const gl::Ray<double>& r, gl::Rng& rng, Mode m, gl::ShellTraceStats* s) {
                 return scene.radiance(r, rng, m, &tracer, nullptr, s);
             });
+        if (!ex.root()) return ex.finish({});  // MPI: rank 0 has the gathered images and writes everything
         const BatchImages &pt = passes.pt, &lo = passes.lo, &hi = passes.hi;
         const gl::ShellTraceStats& ts = passes.ts;
         const double high_samples = double(so.spp_high) * B * double(n_mask);
@@ -215,6 +217,7 @@ int main(int argc, char** argv) {
             .boolean("cut_spheres", scene.cut)
             .boolean("exit_rule_table", to.exit_rule == gl::ShellExitRule::table)
             .boolean("hand_back", scene.hand_back)
+            .str("cos_cells", so.cos_cells)
             .integer("min_scatter", so.min_scatter)
             .num("switch_depth", to.switch_depth)
             .integer("spheres", (long long)kept.size())
@@ -225,6 +228,7 @@ int main(int argc, char** argv) {
             .num("nmf_error", nmf_error)
             .num("shell_raw_bytes", raw_bytes)
             .num("shell_factored_bytes", factored_bytes)
+            .nums("rank_row_counts", rank_row_counts(ex, H))
             .num("wall_seconds", wall);
         return ex.finish(j);  // removes the checkpoints of the completed run
         });

@@ -329,7 +329,7 @@ int main(int argc, char** argv) {
             const gl::GranularAggregate<EB> bulk(tile, gl::VoxelizedBoundary<EB>({}, tile.side()), exemplars, weights, seed);
             const gl::GrainAggregateShellSource<EB> src(bulk, 20 * R);
             return gl::collect_shell_samples(src, radii, shell_paths, seed ^ 0x13u);
-        });
+        }, ex.root());  // MPI: rank 0 saves the table
         const gl::ShellTable& table = ct.table;
         const double build_seconds = ct.build_seconds, nmf_error = ct.nmf_error, raw_bytes = ct.raw_bytes,
                      factored_bytes = ct.factored_bytes;
@@ -361,6 +361,7 @@ int main(int argc, char** argv) {
             [&](const gl::Ray<double>& r, gl::Rng& rng, Mode m, gl::ShellTraceStats* s) {
                 return scene.radiance(r, rng, m, &tracer, s);
             });
+        if (!ex.root()) return ex.finish({});  // MPI: rank 0 has the gathered images and writes everything
         const BatchImages &pt = passes.pt, &lo = passes.lo, &hi = passes.hi;
         const gl::ShellTraceStats& ts = passes.ts;
         const double high_samples = double(spp_high) * B * double(n_mask);
@@ -416,6 +417,7 @@ int main(int argc, char** argv) {
             .num("nmf_error", nmf_error)
             .num("shell_raw_bytes", raw_bytes)
             .num("shell_factored_bytes", factored_bytes)
+            .nums("rank_row_counts", rank_row_counts(ex, H))
             .num("wall_seconds", wall);
         return ex.finish(j);  // removes the checkpoints of the completed run
         });

@@ -8,7 +8,10 @@
 //   moon07_fig9_cube_shadow [--quality quick|full] [--out DIR] [--seed S] [--threads N]
 //        [--spheres N] [--fraction F] [--width W] [--spp-pt N] [--spp-low N] [--spp-high N]
 //        [--batches B] [--min-scatter K] [--switch-depth D] [--light-size S] [--shell-paths N]
-//        [--shell-radii N] [--rebuild-table]
+//        [--shell-radii N] [--rebuild-table] [--cos-cells angle|cos] [--exit-rule table|radial]
+//        [--hand-back] [--no-nee] [--clear-faces] [--whole-spheres] [--sky-cone DEG]
+//   mpirun -np K moon07_fig9_cube_shadow ...   (built with MPI: rank r renders the rows y % K == r
+//        of every batch, gathered on rank 0: the same EXRs as one process)
 //
 // Scene (units: the sphere radius R = 1): N equal glass spheres (eta = 1.5, no absorption) at
 // packing fraction f by random sequential addition (packing/poisson.hpp; paper: 120 000
@@ -25,6 +28,10 @@
 // the noise of both means (the pixel-wise mean (shells - PT)^2 - var(PT) is printed as
 // rmse_shells_pixelwise; at these budgets it is dominated by the reference's noise); speedup_equal_error =
 // seconds_pt rmse_pt^2 / rmse_shells^2 / (seconds_low + seconds_high) (CPU seconds).
+// Bias study (--sky-cone DEG): the light becomes a sky that emits only within DEG of straight
+// down, so path tracing resolves the high-order light leaving near vertically to ~1 % (the
+// shells count escapes: no shadow rays); docs/moon07.md has the numbers that separate the
+// causes of the shells' bias (table cells, exit rule, switch rule).
 // JSON (last stdout line): seconds_pt, seconds_low, seconds_high, rmse_pt, rmse_shells,
 // speedup_equal_error, mean_pt, mean_shells, bias_rel (+ _se: the exit-rule/shell bias of the
 // mean against PT), table figures; paper: 236 min PT vs 12 + 2.25 min, 16x.
@@ -43,6 +50,9 @@ int main(int argc, char** argv) {
         const ShellSceneOptions so = ShellSceneOptions::declare(ex, "cube");
         const double light_size = ex.opt<double>("light-size", 0.12, "side of the square light / L (paper: 'small')");
         const int B = ex.opt<int>("batches", 8, "independent batches per image (>= 4)");
+        const double sky_cone = ex.opt<double>(
+            "sky-cone", 0.0,
+            "bias study: replace the light by a sky above the cube that emits only within this angle of straight down (deg, (0, 90); 0: the paper's small light); forces --no-nee");
         (void)ex.opt<bool>("cut-spheres", true,
                            "a cube cut out of the periodic packing (flat glass faces; the default)");
         const bool whole_spheres = ex.opt<bool>(
@@ -56,6 +66,8 @@ int main(int argc, char** argv) {
         so.check();
         const bool full = ex.full();
         const std::uint64_t seed = ex.seed();
+        if (!(sky_cone >= 0 && sky_cone < 90))
+            throw gl_examples::cli_error("--sky-cone = " + std::to_string(sky_cone) + " must be in [0, 90) degrees");
         if (!(light_size > 0 && light_size <= 1))
             throw gl_examples::cli_error("--light-size = " + std::to_string(light_size) + " must be in (0, 1]");
         if (n_spheres < 100) throw gl_examples::cli_error("--spheres = " + std::to_string(n_spheres) + " must be >= 100");
@@ -81,6 +93,18 @@ int main(int argc, char** argv) {
                                                   Vec3d(0, light_size * L, 0), Vec3d(light_size * L, 0, 0)),
                             S1(0.9 / (light_size * light_size))),
                         gl::QuadShape<double>(Vec3d(-2 * L, -2 * L, 1.5 * L), Vec3d(2.42 * L, 0, 0), Vec3d(0, 5 * L, 0))};
+        if (sky_cone > 0) {
+            // Bias study: a sky 200 L wide at 2.2 L, radiance 1, seen only along directions within
+            // sky_cone of straight down: the cube's light leaving within sky_cone of straight up.
+            // Path tracing finds it on most such exits (no small-light noise); the shells count
+            // their escapes too (no shadow rays: the sky is too wide to sample by area).
+            const double big = 200 * L;
+            scene.light = gl::Light<double, S1>::quad_light(
+                gl::QuadShape<double>(Vec3d(0.5 * L - big / 2, 0.5 * L - big / 2, 2.2 * L), Vec3d(0, big, 0),
+                                      Vec3d(big, 0, 0)),
+                S1(1.0));
+            scene.spot_cos = std::cos(sky_cone * gl::pi_v<double> / 180);
+        }
         if (!whole_spheres) {  // default: the medium the shell table describes up to the faces
             scene.tile = rsa;
             scene.cut = true;
@@ -99,6 +123,7 @@ int main(int argc, char** argv) {
         bo.n_u = full ? 50 : 16;
         bo.n_v = full ? 25 : 16;
         bo.rank = 5;
+        bo.cos_cells = so.cos_layout();
         const std::string key = std::to_string(n_spheres) + "_" + std::to_string(int(fraction * 1000)) + "_" +
                                 std::to_string(so.shell_paths) + "_" + std::to_string(so.n_radii) + "_" +
                                 std::to_string(bo.n_c) + "x" + std::to_string(bo.n_u) + "x" + std::to_string(bo.n_v) +
@@ -107,7 +132,7 @@ int main(int argc, char** argv) {
         const CachedShellTable ct = cached_shell_table(table_path, so.rebuild_table, bo, [&] {
             const gl::SpherePackingShellSource src(rsa, 1.5, 0.0, 20 * R);
             return gl::collect_shell_samples(src, radii, so.shell_paths, seed ^ 0x9u);
-        });
+        }, ex.root());  // MPI: rank 0 saves the table
         const gl::ShellTable& table = ct.table;
         const double build_seconds = ct.build_seconds, nmf_error = ct.nmf_error, raw_bytes = ct.raw_bytes,
                      factored_bytes = ct.factored_bytes;
@@ -116,7 +141,8 @@ int main(int argc, char** argv) {
                   << " CPU s), " << table.n_shells() << " radii " << radii.front() << ".." << radii.back()
                   << " R, raw " << raw_bytes / 1024 << " KiB -> factored " << factored_bytes / 1024 << " KiB\n";
 
-        const gl::ShellTracerOptions to = so.tracer_options(R);
+        gl::ShellTracerOptions to = so.tracer_options(R);
+        if (sky_cone > 0) to.nee = false;
         scene.hand_back = so.hand_back;
         const gl::ShellTracer<S1, gl::BoxDistance> tracer(table, scene.cube, to);
 
@@ -134,6 +160,7 @@ int main(int argc, char** argv) {
             [&](const gl::Ray<double>& r, gl::Rng& rng, Mode m, gl::ShellTraceStats* s) {
                 return scene.radiance(r, rng, m, &tracer, nullptr, s);
             });
+        if (!ex.root()) return ex.finish({});  // MPI: rank 0 has the gathered images and writes everything
         const BatchImages &pt = passes.pt, &lo = passes.lo, &hi = passes.hi;
         const gl::ShellTraceStats& ts = passes.ts;
         const double high_samples = double(so.spp_high) * B * double(n_mask);
@@ -190,6 +217,9 @@ int main(int argc, char** argv) {
             .boolean("clear_faces", scene.clear_faces)
             .boolean("exit_rule_table", to.exit_rule == gl::ShellExitRule::table)
             .boolean("hand_back", scene.hand_back)
+            .num("sky_cone_deg", sky_cone)
+            .boolean("nee", to.nee)
+            .str("cos_cells", so.cos_cells)
             .integer("min_scatter", so.min_scatter)
             .num("switch_depth", to.switch_depth)
             .integer("spheres", (long long)kept.size())
@@ -200,6 +230,7 @@ int main(int argc, char** argv) {
             .num("nmf_error", nmf_error)
             .num("shell_raw_bytes", raw_bytes)
             .num("shell_factored_bytes", factored_bytes)
+            .nums("rank_row_counts", rank_row_counts(ex, H))
             .num("wall_seconds", wall);
         return ex.finish(j);  // removes the checkpoints of the completed run
         });

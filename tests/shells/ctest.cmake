@@ -156,3 +156,15 @@ if(TARGET moon07_fig13_grains OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT
   set_tests_properties(moon07_fig13_grains_bad_preset PROPERTIES PASS_REGULAR_EXPRESSION "presets")
   set_tests_properties(moon07_fig13_grains_json moon07_fig13_grains_bad_preset PROPERTIES LABELS "example;shells")
 endif()
+
+# MPI scale-out of the Moon07 renders (issue 14): moon07_fig9_cube_shadow with 2 ranks (each
+# renders the rows y % 2 == rank of every batch of the three passes, gathered on rank 0) writes
+# the shells image byte-identical to one process and reports "ranks": 2 (a small scene, ~10 s).
+if(TARGET MPI::MPI_CXX AND MPIEXEC_EXECUTABLE AND (TARGET moon07_fig9_cube_shadow OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/moon07_fig9_cube_shadow.cpp)))
+  add_test(NAME moon07_fig9_cube_shadow_mpi
+           COMMAND bash ${PROJECT_SOURCE_DIR}/tests/common/mpi_compare.sh ${MPIEXEC_EXECUTABLE} 2
+                   ${CMAKE_CURRENT_BINARY_DIR}/mpi_fig9_work moon07_fig9_shells.exr $<TARGET_FILE:moon07_fig9_cube_shadow>
+                   --spheres 2000 --width 32 --spp-pt 16 --spp-low 8 --spp-high 8 --batches 4 --shell-paths 4000 --seed 1)
+  set_tests_properties(moon07_fig9_cube_shadow_mpi PROPERTIES LABELS "example;shells;mpi" TIMEOUT 300
+    PASS_REGULAR_EXPRESSION "byte-identical to one process")
+endif()
