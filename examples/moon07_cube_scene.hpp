@@ -15,14 +15,12 @@
 #include <cmath>
 #include <cstdint>
 #include <cctype>
-#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <iostream>
 #include <limits>
 #include <stdexcept>
 #include <string>
-#include <type_traits>
 #include <vector>
 
 #include "common/checkpoint.hpp"
@@ -683,37 +681,6 @@ inline ShellVsPt compare_shells_to_pt(const BatchImages& pt, const BatchImages& 
     return r;
 }
 
-/// The element-wise sum of `v` over the MPI ranks of `mpi`, added in rank order on rank 0 (so the
-/// result does not depend on timing); the other ranks get their own `v` back. One rank: `v`.
-/// (CPU seconds and tallies of renders whose rows are split over the ranks.)
-template <class T>
-[[nodiscard]] std::vector<T> gather_sum(const gl_examples::MpiSession& mpi, const std::vector<T>& v) {
-    static_assert(std::is_trivially_copyable_v<T>);
-    if (mpi.size() == 1) return v;
-    std::vector<unsigned char> mine(v.size() * sizeof(T));
-    if (!v.empty()) std::memcpy(mine.data(), v.data(), mine.size());
-    const auto all = mpi.gather_bytes(mine);
-    if (!mpi.root()) return v;
-    std::vector<T> sum(v.size(), T(0));
-    for (const auto& bytes : all) {
-        if (bytes.size() != mine.size()) throw std::runtime_error("gather_sum: ranks sent different sizes");
-        for (std::size_t i = 0; i < v.size(); ++i) {
-            T x;
-            std::memcpy(&x, bytes.data() + i * sizeof(T), sizeof(T));
-            sum[i] += x;
-        }
-    }
-    return sum;
-}
-
-/// Rows of an H-row image each rank renders (rank r: the rows y with y % ranks == r), for the
-/// JSON summaries' "rank_row_counts".
-[[nodiscard]] inline std::vector<double> rank_row_counts(const gl_examples::Example& ex, int H) {
-    std::vector<double> rows;
-    for (int r = 0; r < ex.ranks(); ++r) rows.push_back(double((H - r + ex.ranks() - 1) / ex.ranks()));
-    return rows;
-}
-
 /// Where a batch render gets its checkpoint, progress bar and row share: the harness Example
 /// (checkpoint_for, ex.progress, rows y % ranks == rank gathered on rank 0), or none (no
 /// checkpoint, a plain progress bar, every row).
@@ -761,7 +728,7 @@ BatchImages render_batches(const gl::PinholeCamera<double>& cam, int spp, int B,
         out.img.push_back(std::move(v));
     }
     bar.done();
-    out.cpu = hooks.ex ? gather_sum(hooks.ex->mpi(), std::vector<double>{cpu})[0] : cpu;  // CPU s of all ranks
+    out.cpu = hooks.ex ? hooks.ex->mpi().sum_to_root({cpu})[0] : cpu;  // CPU s of all ranks
     return out;
 }
 
@@ -813,15 +780,15 @@ ShellPasses render_shell_passes(const gl::PinholeCamera<double>& cam, int spp_pt
         p.ts.exits += t.exits;
         p.ts.straight_escapes += t.straight_escapes;
     }
-    if (hooks.ex) {  // every rank's tallies, summed on rank 0
-        const std::vector<std::uint64_t> all = gather_sum(
-            hooks.ex->mpi(), std::vector<std::uint64_t>{p.ts.paths, p.ts.steps, p.ts.scattered, p.ts.exits,
-                                                        p.ts.straight_escapes});
-        p.ts.paths = all[0];
-        p.ts.steps = all[1];
-        p.ts.scattered = all[2];
-        p.ts.exits = all[3];
-        p.ts.straight_escapes = all[4];
+    if (hooks.ex) {  // every rank's tallies, summed on rank 0 (exact as doubles below 2^53)
+        const std::vector<double> all = hooks.ex->mpi().sum_to_root(
+            {double(p.ts.paths), double(p.ts.steps), double(p.ts.scattered), double(p.ts.exits),
+             double(p.ts.straight_escapes)});
+        p.ts.paths = std::uint64_t(all[0]);
+        p.ts.steps = std::uint64_t(all[1]);
+        p.ts.scattered = std::uint64_t(all[2]);
+        p.ts.exits = std::uint64_t(all[3]);
+        p.ts.straight_escapes = std::uint64_t(all[4]);
     }
     return p;
 }
@@ -831,7 +798,7 @@ ShellPasses render_shell_passes(const gl::PinholeCamera<double>& cam, int spp_pt
 /// ex.progress, and under MPI (`mpirun -np K`) rank r renders the rows y % K == r of every batch,
 /// gathered on rank 0 (the images there are byte-identical to one process's; the other ranks'
 /// BatchImages hold empty images: they should return ex.finish({}) after this call); CPU
-/// seconds and shell-step tallies are summed over the ranks.
+/// seconds and shell-step tallies are summed over the ranks (MpiSession::sum_to_root).
 template <class Radiance>
 ShellPasses render_shell_passes(const gl_examples::Example& ex, const gl::PinholeCamera<double>& cam, int spp_pt,
                                 int spp_low, int spp_high, int B, const std::string& tag, Radiance&& radiance) {

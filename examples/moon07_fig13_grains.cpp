@@ -417,7 +417,8 @@ int main(int argc, char** argv) {
             .num("nmf_error", nmf_error)
             .num("shell_raw_bytes", raw_bytes)
             .num("shell_factored_bytes", factored_bytes)
-            .nums("rank_row_counts", rank_row_counts(ex, H))
+            .str("rank_rows", "rank r renders the rows y with y % ranks == r")
+            .nums("rank_row_counts", ex.mpi().row_counts(H))
             .num("wall_seconds", wall);
         return ex.finish(j);  // removes the checkpoints of the completed run
         });

@@ -812,7 +812,8 @@ struct ShellBuildOptions {
     /// Layout of the cos theta_1 cells. uniform_angle (default): equal widths in theta_1, so the
     /// forward peak of small shells keeps its shape (with equal cos cells, 24 of them, the glass
     /// spheres' r = 2 R table lost 0.04 of the mean cosine between entry and exit direction, the
-    /// cause of +6 % of Fig. 9's shell bias at quick); the k-NN runs in the cell coordinate.
+    /// cause of most of Fig. 9's shell bias at quick, docs/moon07.md); the k-NN runs in the cell
+    /// coordinate.
     ShellCosCells cos_cells = ShellCosCells::uniform_angle;
 };
 
