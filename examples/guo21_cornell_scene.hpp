@@ -14,7 +14,9 @@
 #include <string>
 #include <vector>
 
+#include "common/harness.hpp"
 #include "common/progress.hpp"
+#include "guo21_mpi_render.hpp"
 #include "grainlight/integrators/discrete_vpt.hpp"
 #include "grainlight/integrators/render.hpp"
 #include "grainlight/scene/camera.hpp"
@@ -81,7 +83,11 @@ inline std::vector<char> cloud_mask(const gl::PinholeCamera<float>& camera, int 
 
 /// One render split into B batches of spp / B samples with different seeds (the same total cost
 /// as one render): the mean image, the per-sample variance over the masked pixels from the batch
-/// scatter (measuring.md: time to unit variance), wall and process CPU seconds.
+/// scatter (measuring.md: time to unit variance), wall and CPU seconds. Each batch is split over
+/// the MPI ranks by rows and gathered on every rank (guo21_mpi_render.hpp), with its checkpoint
+/// "<label>.b<batch>" when the example was run with --checkpoint / --resume; `render(opt,
+/// progress)` returns this rank's film. cpu_seconds is the process CPU time of the renders alone
+/// (not the gathers), summed over the ranks; seconds is rank 0's wall time (gathers included).
 struct Run {
     gl::Image img;
     double seconds = 0, cpu_seconds = 0;
@@ -89,28 +95,31 @@ struct Run {
     double var_half_ratio = 0;          ///< variance estimate of batches 0..B/2-1 over B/2..B-1
     double mean_se = 0;                 ///< standard error of the masked mean (from the batches)
     int spp = 0;
+    std::uint64_t nonfinite = 0;        ///< non-finite samples the batches' films dropped
     /// Time to unit variance: per-sample variance x CPU seconds per sample (per pixel).
     [[nodiscard]] double ttuv(std::size_t pixels) const { return var_per_sample * cpu_seconds / (double(spp) * double(pixels)); }
 };
 
 template <class Render>
-Run render_batches(int batches, const gl::RenderOptions& base, const std::vector<char>& mask, const std::string& label,
-                   int rows, Render&& render,
-                   const std::function<gl::CheckpointOptions(const std::string&)>& checkpoint = {}) {
+Run render_batches(const gl_examples::Example& ex, int batches, const gl::RenderOptions& base, const std::vector<char>& mask,
+                   const std::string& label, int rows, Render&& render, bool checkpoint = true) {
     Run r;
-    gl_examples::ProgressBar bar(label, std::uint64_t(rows) * std::uint64_t(batches));
+    gl_examples::ProgressBar bar(label, std::uint64_t(rows) * std::uint64_t(batches), !ex.root());
     std::vector<gl::Image> imgs;
     const auto t0 = std::chrono::steady_clock::now();
-    const std::clock_t c0 = std::clock();
+    guo21_mpi::RankClock clock;
     const int spp_b = std::max(1, base.spp / batches);
     for (int b = 0; b < batches; ++b) {
         gl::RenderOptions o = base;
         o.spp = spp_b;
         o.seed = base.seed * 1000003ull + std::uint64_t(b) * 7919ull + 1;
-        if (checkpoint) o.checkpoint = checkpoint(label + ".b" + std::to_string(b));  // --checkpoint / --resume
-        imgs.push_back(render(o, [&](int n) { bar.advance(std::uint64_t(n)); }));
+        const gl::Film film = guo21_mpi::render_film(
+            ex, o, checkpoint ? label + ".b" + std::to_string(b) : std::string(), render,
+            [&](int n) { bar.advance(std::uint64_t(n)); }, &clock);
+        r.nonfinite += film.nonfinite_samples();
+        imgs.push_back(film.image());
     }
-    r.cpu_seconds = double(std::clock() - c0) / CLOCKS_PER_SEC;
+    r.cpu_seconds = guo21_mpi::sum_over_ranks(ex.mpi(), clock.cpu);
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     bar.done();
     r.spp = spp_b * batches;
@@ -156,13 +165,12 @@ Run render_batches(int batches, const gl::RenderOptions& base, const std::vector
 
 /// render_batches of the discrete-medium VPT (integrators/discrete_vpt.hpp) of `sc` through `camera`.
 template <class SceneT, class Camera>
-Run render_scene_batches(int batches, const gl::RenderOptions& base, const std::vector<char>& mask, const std::string& label,
-                         int rows, const SceneT& sc, const Camera& camera,
-                         const std::function<gl::CheckpointOptions(const std::string&)>& checkpoint = {}) {
+Run render_scene_batches(const gl_examples::Example& ex, int batches, const gl::RenderOptions& base,
+                         const std::vector<char>& mask, const std::string& label, int rows, const SceneT& sc,
+                         const Camera& camera, bool checkpoint = true) {
     return render_batches(
-        batches, base, mask, label, rows,
-        [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_discrete_vpt(sc, camera, o, prog).image(); },
-        checkpoint);
+        ex, batches, base, mask, label, rows,
+        [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_discrete_vpt(sc, camera, o, prog); }, checkpoint);
 }
 
 /// Mean over the pixels whose centre ray passes through the cloud's box and does not see the

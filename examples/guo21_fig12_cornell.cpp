@@ -108,6 +108,7 @@ int main(int argc, char** argv) {
                         "walls, CIE 1931 -> sRGB; spp / 8 per wavelength)") != 0;
         ex.checkpointable();
         ex.ready();
+        guo21_mpi::quiet_other_ranks(ex);
         const auto& out = ex.out();
         const int threads = ex.threads();
         if (width < 8 || width > 8192) throw cli_error("--width = " + std::to_string(width) + " must be in [8, 8192]");
@@ -138,10 +139,8 @@ int main(int argc, char** argv) {
         opt.vpt.max_depth = 256;
         // --checkpoint SECONDS / --resume: one checkpoint per render (kept when it finishes, so a
         // resumed run skips the renders already done; ex.finish removes them). A resumed run's
-        // timings count only the rows it rendered itself.
-        const std::function<gl::CheckpointOptions(const std::string&)> checkpoint = [&](const std::string& label) {
-            return gl_examples::checkpoint_for(ex, label);
-        };
+        // timings count only the rows it rendered itself. Under mpirun every render is split by
+        // rows over the ranks and gathered on each (guo21_mpi_render.hpp); only rank 0 writes.
 
         std::printf("Guo21 Fig. 12 (Sec. 6.1): %llu ice spheres r = %.0f um in a 1 m Cornell box, %dx%d, %d spp\n",
                     (unsigned long long)count, kRadiusUm, width, width, spp);
@@ -153,7 +152,7 @@ int main(int argc, char** argv) {
             using M = gl::ExplicitSphereMedium<float>;
             gl::Scene<M> sc;
             build_cornell(sc, sc.add_medium(M(grid, 1.31f)), 1.5 * r_p);
-            ept = render_scene_batches(batches, opt, mask, "EPT", width, sc, camera, checkpoint);
+            ept = render_scene_batches(ex, batches, opt, mask, "EPT", width, sc, camera);
         }
         // Ours with and without diffraction at r_c.
         double memory_mb = 0, bytes_pp = 0;
@@ -171,7 +170,7 @@ int main(int argc, char** argv) {
                 memory_mb = double(sc.medium(0).memory_bytes()) / (1024.0 * 1024.0);
                 bytes_pp = double(sc.medium(0).memory_bytes()) / double(count);
             }
-            return render_scene_batches(batches, opt, mask, label, width, sc, camera, checkpoint);
+            return render_scene_batches(ex, batches, opt, mask, label, width, sc, camera);
         };
         const double r_c = rc_over_rp * r_p;
         const Run ours = render_ours(r_c, true, "ours", true);
@@ -192,7 +191,7 @@ int main(int argc, char** argv) {
         auto render_spectral = [&](int kind, const std::string& label) {  // 0 EPT, 1 ours, 2 ours -FD
             SpectralRun sr;
             std::vector<gl::Image> per;
-            gl_examples::ProgressBar bar(label, std::uint64_t(width) * 8);
+            gl_examples::ProgressBar bar(label, std::uint64_t(width) * 8, !ex.root());
             const auto t0 = std::chrono::steady_clock::now();
             gl::ParticleGridSettings gs;
             gs.dilation = kind == 0 ? 0.0 : r_c;
@@ -203,13 +202,15 @@ int main(int argc, char** argv) {
                 gl::RenderOptions o = opt;
                 o.spp = spp_lambda;
                 o.seed = opt.seed * 1000003ull + 104729ull * (i + 1);
-                o.checkpoint = checkpoint(label + ".lambda" + std::to_string(i));
+                const std::string stem = label + ".lambda" + std::to_string(i);
                 auto prog = [&](int n) { bar.advance(std::uint64_t(n)); };
                 if (kind == 0) {
                     using M = gl::ExplicitSphereMedium<float>;
                     gl::Scene<M> sc;
                     build_cornell(sc, sc.add_medium(M(grid, float(m_ice.real()))), 1.5 * r_p, colours.at(lnm));
-                    per.push_back(gl::render_discrete_vpt(sc, camera, o, prog).image());
+                    per.push_back(guo21_mpi::render_image(
+                        ex, o, stem, [&](const gl::RenderOptions& oo, auto&& p) { return gl::render_discrete_vpt(sc, camera, oo, p); },
+                        prog));
                 } else {
                     gl::ParticleModel mi = model;
                     mi.particle_index = m_ice;
@@ -220,7 +221,9 @@ int main(int argc, char** argv) {
                     using M = gl::DiscreteParticleMedium<float>;
                     gl::Scene<M> sc;
                     build_cornell(sc, sc.add_medium(M(grid, {mi}, ms)), 1.5 * r_p + r_c, colours.at(lnm));
-                    per.push_back(gl::render_discrete_vpt(sc, camera, o, prog).image());
+                    per.push_back(guo21_mpi::render_image(
+                        ex, o, stem, [&](const gl::RenderOptions& oo, auto&& p) { return gl::render_discrete_vpt(sc, camera, oo, p); },
+                        prog));
                 }
             }
             sr.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -245,6 +248,7 @@ int main(int argc, char** argv) {
         const double m_ept = masked_mean(ept.img, mask), m_ours = masked_mean(ours.img, mask), m_fd = masked_mean(ours_fd.img, mask);
         const double m_k05 = masked_mean(fd_k05.img, mask), m_k1 = masked_mean(fd_k1.img, mask);
         const double ev = std::log2(0.18 / std::max(m_ept, 1e-12));
+        if (ex.root()) {
         gl::write_exr(out / "ept.exr", ept.img);
         gl::write_png(out / "ept.png", ept.img, {ev});
         gl::write_exr(out / "ours.exr", ours.img);
@@ -263,6 +267,7 @@ int main(int argc, char** argv) {
             gl::write_png(out / "ours_spectral.png", sp_ours.img, {evs});
             gl::write_exr(out / "ours_no_diffraction_spectral.exr", sp_fd.img);
             gl::write_png(out / "ours_no_diffraction_spectral.png", sp_fd.img, {evs});
+        }
         }
 
         // Predicted mean-extinction factor of the membership rule for -FD (C_t = pi r_p^2):
@@ -346,6 +351,9 @@ int main(int argc, char** argv) {
             .num("paper_time_ratio", 1.2)
             .num("memory_mb_discrete", memory_mb)
             .num("bytes_per_particle", bytes_pp);
+        guo21_mpi::rank_rows(j, ex, width);
+        j.str("cpu_seconds_note", "process CPU seconds of the renders, summed over the ranks");
+        gl_examples::Example::nonfinite(j, ept.nonfinite + ours.nonfinite + ours_fd.nonfinite);
         if (spectral)
             j.num("mean_luminance_ept_spectral", sp_ept.mean_luminance)
                 .num("mean_luminance_discrete_spectral", sp_ours.mean_luminance)

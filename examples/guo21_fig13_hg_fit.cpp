@@ -8,7 +8,10 @@
 // discrete medium (whose per-particle phase would be replaced the same way).
 //
 //   guo21_fig13_hg_fit [--quality quick|full] [--out DIR] [--seed S] [--threads N] [--spp N]
-//                      [--width W] [--count N]
+//                      [--width W] [--count N] [--checkpoint SECONDS] [--resume]
+//
+// Every render is split by rows over MPI ranks (mpirun -np K: byte-identical EXRs) and resumable
+// (--checkpoint / --resume: one checkpoint per batch in --out); CPU seconds are summed over ranks.
 //
 // Paper: "the HG phase function cannot faithfully encode the scattering pattern from these
 // relatively large particles", renders "slightly different" (closeups; no numbers). Printed and in
@@ -88,7 +91,9 @@ int main(int argc, char** argv) {
             const int spp = ex.opt<int>("spp", 512, 2048, "samples per pixel (8 seeded batches)");
             const int width = ex.opt<int>("width", 64, 512, "image width = height");
             const auto count = ex.opt<std::uint64_t>("count", 100000, "particle count (paper: 1e5)");
+            ex.checkpointable();
             ex.ready();
+            guo21_mpi::quiet_other_ranks(ex);
             if (width < 8 || width > 8192) throw gl_examples::cli_error("--width must be in [8, 8192]");
             if (spp < 8 || spp > 65536) throw gl_examples::cli_error("--spp must be in [8, 65536]");
             if (!(count >= 1 && count <= 100000000)) throw gl_examples::cli_error("--count must be in [1, 1e8]");
@@ -151,8 +156,8 @@ int main(int argc, char** argv) {
                 using CMed = gl::ForcedCollisionMedium<P>;
                 gl::Scene<CMed> sc;
                 guo21_cornell::build_cornell(sc, sc.add_medium(CMed(float(sigma_t), float(albedo), phase)), margin);
-                return guo21_cornell::render_batches(batches, opt, mask, label, width, [&](const gl::RenderOptions& o, auto&& prog) {
-                    return gl::render_vpt(sc, camera, o, prog).image();
+                return guo21_cornell::render_batches(ex, batches, opt, mask, label, width, [&](const gl::RenderOptions& o, auto&& prog) {
+                    return gl::render_vpt(sc, camera, o, prog);
                 });
             };
             std::printf("Guo21 Fig. 13 (Sec. 6.2): %llu ice spheres r = %.0f um in the Fig. 12 Cornell box (continuous medium "
@@ -197,6 +202,7 @@ int main(int argc, char** argv) {
             gl_examples::Csv pc({"theta_deg", "phase_tabulated", "phase_hg_same_g", "phase_hg_lsq"});
             for (std::size_t i = 0; i < th.size(); ++i)
                 pc.row({th[i] * 180 / gl::pi_v<double>, p_tab[i], hg(std::cos(th[i]), g_tab), hg(std::cos(th[i]), g_lsq)});
+            if (!ex.root()) return ex.finish({});  // only rank 0 writes
             const auto phase_csv = ex.csv("guo21_fig13_phase.csv", pc);
             ex.plot("guo21_fig13_hg_fit", phase_csv, out / "guo21_fig13_hg_fit.png");
             const double ev = std::log2(0.18 / std::max(m_tab, 1e-12));
@@ -246,7 +252,10 @@ int main(int argc, char** argv) {
                 .num("forward_peak_ratio_tab_over_hg", v_tab[0] / v_hg[0])
                 .num("rainbow_138_ratio_tab_over_hg", v_tab[3] / v_hg[3])
                 .num("cpu_seconds_tabulated", r_tab.cpu_seconds)
-                .num("cpu_seconds_hg", r_hg.cpu_seconds);
+                .num("cpu_seconds_hg", r_hg.cpu_seconds)
+                .str("cpu_seconds_note", "process CPU seconds of the renders, summed over the ranks");
+            guo21_mpi::rank_rows(j, ex, width);
+            gl_examples::Example::nonfinite(j, r_tab.nonfinite + r_hg.nonfinite + r_lsq.nonfinite);
             return ex.finish(j);
         });
 }

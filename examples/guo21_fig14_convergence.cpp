@@ -31,6 +31,7 @@
 #include <memory>
 
 #include "common/checkpoint.hpp"
+#include "guo21_mpi_render.hpp"
 #include "common/harness.hpp"
 #include "grainlight/integrators/discrete_vpt.hpp"
 #include "grainlight/integrators/render.hpp"
@@ -86,6 +87,7 @@ int main(int argc, char** argv) {
                                           "sigma_g = 1.4 in [2, 20] um) against the continuous medium of the mixed bulk properties");
         ex.checkpointable();
         ex.ready();
+        guo21_mpi::quiet_other_ranks(ex);
         const auto& out = ex.out();
         if (width < 8 || width > 8192) throw gl_examples::cli_error("--width must be in [8, 8192]");
         const int height = width * 3 / 4;
@@ -167,12 +169,13 @@ int main(int argc, char** argv) {
             auto bar_c = ex.progress("continuous N=" + std::to_string(N), std::uint64_t(2 * height));
             gl::RenderOptions opt1 = opt;
             opt1.spp = spp * continuous_spp_factor;
-            opt1.checkpoint = gl_examples::checkpoint_for(ex, "continuous1_N" + std::to_string(N));
-            const gl::Image ci1 = gl::render_vpt(csc, camera, opt1, [&](int n) { bar_c.advance(std::uint64_t(n)); }).image();
+            // Every render: this rank's rows, its checkpoint, gathered on every rank (guo21_mpi_render.hpp).
+            auto vpt_c = [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_vpt(csc, camera, o, prog); };
+            auto prog_c = [&](int n) { bar_c.advance(std::uint64_t(n)); };
+            const gl::Image ci1 = guo21_mpi::render_image(ex, opt1, "continuous1_N" + std::to_string(N), vpt_c, prog_c);
             gl::RenderOptions opt2 = opt1;
             opt2.seed = opt.seed + 1000003;
-            opt2.checkpoint = gl_examples::checkpoint_for(ex, "continuous2_N" + std::to_string(N));
-            const gl::Image ci2 = gl::render_vpt(csc, camera, opt2, [&](int n) { bar_c.advance(std::uint64_t(n)); }).image();
+            const gl::Image ci2 = guo21_mpi::render_image(ex, opt2, "continuous2_N" + std::to_string(N), vpt_c, prog_c);
             bar_c.done();
             gl::Image ci = ci1;  // the reference: the average of the two continuous renders
             for (std::size_t i = 0; i < ci.rgb.size(); ++i) ci.rgb[i] = 0.5f * (ci1.rgb[i] + ci2.rgb[i]);
@@ -206,10 +209,10 @@ int main(int argc, char** argv) {
             sigma_rel.push_back(dsc.medium(0).global_sigma_t() / sigma_t - 1);
             const double bytes_pp = double(dsc.medium(0).memory_bytes()) / double(N);
             auto bar_d = ex.progress("discrete N=" + std::to_string(N), std::uint64_t(height));
-            gl::RenderOptions optd = opt;
-            optd.checkpoint = gl_examples::checkpoint_for(ex, "discrete_N" + std::to_string(N));
-            const gl::Image di =
-                gl::render_discrete_vpt(dsc, camera, optd, [&](int n) { bar_d.advance(std::uint64_t(n)); }).image();
+            const gl::Image di = guo21_mpi::render_image(
+                ex, opt, "discrete_N" + std::to_string(N),
+                [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_discrete_vpt(dsc, camera, o, prog); },
+                [&](int n) { bar_d.advance(std::uint64_t(n)); });
             bar_d.done();
             const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -228,11 +231,13 @@ int main(int argc, char** argv) {
             csv.row({double(N), sigma_t, md, mc, rel_diff.back(), rmse.back(), noise.back(), sec, bytes_pp});
             const double ev = std::log2(0.18 / std::max(mc, 1e-12));
             const std::string tag = "N" + std::to_string(N);
+            if (!ex.root()) continue;  // only rank 0 writes
             gl::write_exr(out / ("discrete_" + tag + ".exr"), di);
             gl::write_png(out / ("discrete_" + tag + ".png"), di, {ev});
             gl::write_exr(out / ("continuous_" + tag + ".exr"), ci);
             gl::write_png(out / ("continuous_" + tag + ".png"), ci, {ev});
         }
+        if (!ex.root()) return ex.finish({});
         const auto csv_path = out / "guo21_fig14_convergence.csv";
         csv.write(csv_path);
         ex.plot("guo21_fig14_convergence", csv_path, out / "guo21_fig14_convergence_plot.png");
@@ -281,6 +286,7 @@ int main(int argc, char** argv) {
             .num("continuous_noise_max", *std::max_element(noise.begin(), noise.end()))
             .num("bytes_per_particle_max", *std::max_element(mem_pp.begin(), mem_pp.end()))
             .str("csv", csv_path.string());
+        guo21_mpi::rank_rows(j, ex, height);
         return ex.finish(j);
     });
 }

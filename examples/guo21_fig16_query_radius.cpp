@@ -11,6 +11,10 @@
 //
 //   guo21_fig16_query_radius [--quality quick|full] [--out DIR] [--seed S] [--threads N]
 //                            [--spp N] [--width W] [--count N] [--k 0.1,0.2,...] [--diffraction on|off]
+//                            [--checkpoint SECONDS] [--resume]
+//
+// Every render is split by rows over MPI ranks (mpirun -np K: byte-identical EXRs) and resumable
+// (--checkpoint / --resume: one checkpoint per render in --out).
 //
 // Paper: k in [0.5, 1] gives a reasonable grainy look with little bias; large k blurs the glints
 // (overall brightness similar to k = 0.5); small k misses particles (inefficient for sparse media).
@@ -32,6 +36,7 @@
 #include "grainlight/media/discrete_particles.hpp"
 #include "grainlight/scene/image_io.hpp"
 #include "guo21_cube_scene.hpp"
+#include "guo21_mpi_render.hpp"
 
 namespace gl = grainlight;
 using S = gl::Spectrum<1, float>;
@@ -50,7 +55,9 @@ int main(int argc, char** argv) {
                                             "query-cylinder scales k of Eq. 23 (ascending)");
             const bool diffraction =
                 ex.opt<bool>("diffraction", false, "off: Guo21's -FD (ray optics, C_t = pi r^2); on: with Fraunhofer diffraction");
+            ex.checkpointable();
             ex.ready();
+            guo21_mpi::quiet_other_ranks(ex);
             if (width < 8 || width > 8192) throw gl_examples::cli_error("--width must be in [8, 8192]");
             if (spp < 2 || spp > 65536) throw gl_examples::cli_error("--spp must be in [2, 65536]");
             if (!(count >= 100 && count <= 100000000)) throw gl_examples::cli_error("--count must be in [100, 1e8]");
@@ -104,10 +111,14 @@ int main(int argc, char** argv) {
                 std::snprintf(tag, sizeof tag, "k%g", k);
                 const auto t0 = std::chrono::steady_clock::now();
                 auto bar_d = ex.progress(std::string("discrete ") + tag, std::uint64_t(2 * height));
-                const gl::Image d1 = gl::render_discrete_vpt(dsc, camera, opt, [&](int n) { bar_d.advance(std::uint64_t(n)); }).image();
+                // Every render: this rank's rows, its checkpoint, gathered on every rank (guo21_mpi_render.hpp).
+                auto dvpt = [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_discrete_vpt(dsc, camera, o, prog); };
+                auto prog_d = [&](int n) { bar_d.advance(std::uint64_t(n)); };
+                const std::string stem = std::string("discrete_") + tag;
+                const gl::Image d1 = guo21_mpi::render_image(ex, opt, stem + ".a", dvpt, prog_d);
                 gl::RenderOptions o2 = opt;
                 o2.seed = opt.seed + 2000003;
-                const gl::Image d2 = gl::render_discrete_vpt(dsc, camera, o2, [&](int n) { bar_d.advance(std::uint64_t(n)); }).image();
+                const gl::Image d2 = guo21_mpi::render_image(ex, o2, stem + ".b", dvpt, prog_d);
                 bar_d.done();
                 const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
                 const gl::Image di = average(d1, d2);
@@ -121,16 +132,21 @@ int main(int argc, char** argv) {
                     guo21_cube::build_scene(csc, csc.add_medium(CMed(float(cp.sigma_t), float(cp.albedo), cp.phase)));
                     gl::RenderOptions oc = opt;
                     oc.spp = 2 * opt.spp;
-                    const gl::Image ci = gl::render_vpt(csc, camera, oc, [](int) {}).image();
+                    const gl::Image ci = guo21_mpi::render_image(
+                        ex, oc, "continuous", [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_vpt(csc, camera, o, prog); },
+                        [](int) {});
                     mean_pair = ci.mean(0);
-                    gl::write_exr(out / "continuous.exr", ci);
-                    gl::write_png(out / "continuous.png", ci, {std::log2(0.18 / std::max(mean_pair, 1e-12))});
+                    if (ex.root()) {
+                        gl::write_exr(out / "continuous.exr", ci);
+                        gl::write_png(out / "continuous.png", ci, {std::log2(0.18 / std::max(mean_pair, 1e-12))});
+                    }
                 }
                 // Prediction: the factor-scaled continuous medium, two halves (its own noise).
                 gl::Scene<CMed> fsc;
                 guo21_cube::build_scene(fsc, fsc.add_medium(CMed(float(cp.sigma_t * cp.factor), float(cp.albedo), cp.phase_factor)));
-                const gl::Image p1 = gl::render_vpt(fsc, camera, opt, [](int) {}).image();
-                const gl::Image p2 = gl::render_vpt(fsc, camera, o2, [](int) {}).image();
+                auto pvpt = [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_vpt(fsc, camera, o, prog); };
+                const gl::Image p1 = guo21_mpi::render_image(ex, opt, std::string("predicted_") + tag + ".a", pvpt, [](int) {});
+                const gl::Image p2 = guo21_mpi::render_image(ex, o2, std::string("predicted_") + tag + ".b", pvpt, [](int) {});
                 const gl::Image pi = average(p1, p2);
                 const double md = di.mean(0), mp = pi.mean(0);
                 const double raw = guo21_cube::rel_rmse(di, pi, mp);
@@ -157,9 +173,11 @@ int main(int argc, char** argv) {
                             md / mp - 1, grain, nd, sec);
                 csv.row({k, r_c * 1e3, cp.factor, members, md, mp, md / mp - 1, grain, nd, sec});
                 const double ev = std::log2(0.18 / std::max(mean_pair, 1e-12));
+                if (!ex.root()) continue;  // only rank 0 writes
                 gl::write_exr(out / (std::string("discrete_") + tag + ".exr"), di);
                 gl::write_png(out / (std::string("discrete_") + tag + ".png"), di, {ev});
             }
+            if (!ex.root()) return ex.finish({});
             const auto csv_path = ex.csv("guo21_fig16_query_radius.csv", csv);
             ex.plot("guo21_fig16_query_radius", csv_path, out / "guo21_fig16_query_radius.png");
             double max_abs_rd = 0;
@@ -200,6 +218,7 @@ int main(int argc, char** argv) {
                 .num("factor_max", v_fac[i_max])
                 .num("k_at_factor_max", v_k[i_max])
                 .str("csv", csv_path.string());
+            guo21_mpi::rank_rows(j, ex, height);
             return ex.finish(j);
         });
 }

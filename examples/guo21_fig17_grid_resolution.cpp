@@ -13,7 +13,12 @@
 // swept forwards then backwards, against load from other processes).
 //
 //   guo21_fig17_grid_resolution [--quality quick|full] [--out DIR] [--seed S] [--threads N]
-//                               [--count N] [--spp N] [--width W]
+//                               [--count N] [--spp N] [--width W] [--checkpoint SECONDS] [--resume]
+//
+// Under mpirun every render is split by rows over the ranks and gathered (the EXR is byte-identical
+// to one process's); its CPU seconds are summed over the ranks; the query benchmark runs on every
+// rank and rank 0's is reported. --checkpoint / --resume keep one checkpoint per render (a resumed
+// sweep's times count only the rows it rendered itself: time a sweep without resuming).
 //
 // Last stdout line: JSON with particles_per_voxel, resolution_x/y/z, cpu_seconds (lists over the
 // sweep), fastest_particles_per_voxel, fastest_resolution and the paper's 60^3 at 2e5 particles.
@@ -27,6 +32,7 @@
 #include <vector>
 
 #include "common/harness.hpp"
+#include "guo21_mpi_render.hpp"
 #include "grainlight/core/warp.hpp"
 #include "grainlight/integrators/discrete_vpt.hpp"
 #include "grainlight/media/discrete_particles.hpp"
@@ -61,7 +67,9 @@ int main(int argc, char** argv) {
                                             "query radius parameter k of Eq. 23 (default: r_c ~ voxel / 75, the paper's regime; paper's renders: 0.5-1)");
         const auto rays = ex.opt<std::uint64_t>("rays", 100000, 2000000, "rays of the query benchmark per resolution");
         const auto passes = ex.opt<std::uint64_t>("passes", 3, 3, "sweeps (forwards, backwards, ...); the best time counts");
+        ex.checkpointable();
         ex.ready();
+        guo21_mpi::quiet_other_ranks(ex);
         if (count < 1000 || count > 50000000) throw gl_examples::cli_error("--count must be in [1000, 5e7]");
         if (spp < 1 || spp > 65536) throw gl_examples::cli_error("--spp must be in [1, 65536]");
         if (width < 16 || width > 4096) throw gl_examples::cli_error("--width must be in [16, 4096]");
@@ -98,7 +106,7 @@ int main(int argc, char** argv) {
         std::printf("Guo21 Fig. 17 (Sec. 6.5): %llu ice particles (log-normal r_g = 800 um, sigma_g = 4), %dx%d, %d spp,"
                     " r_c = %.3f mm (k = %.3g)\n",
                     (unsigned long long)count, W, H, int(spp), r_c * 1e3, k_eq23);
-        gl_examples::ProgressBar bar("grid sweep", passes * ppv_target.size() * std::uint64_t(H));
+        gl_examples::ProgressBar bar("grid sweep", passes * ppv_target.size() * std::uint64_t(H), !ex.root());
         for (int pass = 0; pass < int(passes); ++pass)
             for (std::size_t q = 0; q < ppv_target.size(); ++q) {
                 const std::size_t k = pass == 0 ? q : ppv_target.size() - 1 - q;
@@ -144,9 +152,12 @@ int main(int argc, char** argv) {
                     pts[k].query_ns = std::min(pts[k].query_ns, qs * 1e9 / double(rays));
                     if (sink == -1) std::printf(" ");
                 }
-                const std::clock_t c0 = std::clock();
-                const gl::Image img = gl::render_discrete_vpt(sc, camera, opt, [&](int n) { bar.advance(std::uint64_t(n)); }).image();
-                const double cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
+                guo21_mpi::RankClock clock;
+                const gl::Image img = guo21_mpi::render_image(
+                    ex, opt, "ppv" + std::to_string(k) + ".pass" + std::to_string(pass),
+                    [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_discrete_vpt(sc, camera, o, prog); },
+                    [&](int n) { bar.advance(std::uint64_t(n)); }, &clock);
+                const double cpu = guo21_mpi::sum_over_ranks(ex.mpi(), clock.cpu);
                 Point& p = pts[k];
                 p.res = grid->resolution();
                 p.ppv = double(count) / double(grid->cell_count());
@@ -157,7 +168,7 @@ int main(int argc, char** argv) {
                 double s = 0;
                 for (std::size_t i = 0; i < img.rgb.size(); i += 3) s += img.rgb[i];
                 p.mean = s / double(img.rgb.size() / 3);
-                if (pass == 0 && k == 4) {
+                if (pass == 0 && k == 4 && ex.root()) {
                     first_img = img;
                     gl::write_exr(ex.out() / "render_ppv1.exr", img);
                     gl::write_png(ex.out() / "render_ppv1.png", img);
@@ -200,10 +211,13 @@ int main(int argc, char** argv) {
         std::printf("  fastest: %d x %d x %d = %.2f particles per voxel (paper: 60^3 for 2e5 particles = %.2f per voxel;\n"
                     "  'roughly one particle per voxel')\n",
                     b.res[0], b.res[1], b.res[2], b.ppv, 2e5 / (60.0 * 60 * 60));
+        if (!ex.root()) return ex.finish({});  // only rank 0 writes
         const auto csv_path = ex.csv("guo21_fig17_grid_resolution.csv", csv);
         ex.plot("guo21_fig17_grid_resolution", csv_path, ex.out() / "guo21_fig17_grid_resolution.png");
-        return ex.finish(ex.summary()
-                             .integer("count", (long long)count)
+        auto j = ex.summary();
+        guo21_mpi::rank_rows(j, ex, H);
+        j.str("cpu_seconds_note", "process CPU seconds of the renders, summed over the ranks");
+        return ex.finish(j.integer("count", (long long)count)
                              .integer("spp", (long long)spp)
                              .num("query_radius_m", r_c)
                              .nums("particles_per_voxel", v_ppv)

@@ -11,6 +11,10 @@
 //
 //   guo21_fig18_absorption [--quality quick|full] [--out DIR] [--seed S] [--threads N]
 //                          [--spp N] [--width W] [--count N] [--eta-i 0,1e-5,...] [--query-radius-um R]
+//                          [--checkpoint SECONDS] [--resume]
+//
+// Every render is split by rows over MPI ranks (mpirun -np K: byte-identical EXRs) and resumable
+// (--checkpoint / --resume: one checkpoint per render in --out).
 //
 // Paper: "an increase of eta_i will increasingly dim the intensity of scattering" (no numbers; the
 // eta_i of the figure's panels are not in the text). Default -FD (ray optics, C_t = pi r^2): with
@@ -31,6 +35,7 @@
 
 #include "common/harness.hpp"
 #include "guo21_cube_scene.hpp"
+#include "guo21_mpi_render.hpp"
 #include "grainlight/integrators/discrete_vpt.hpp"
 #include "grainlight/integrators/render.hpp"
 #include "grainlight/media/discrete_particles.hpp"
@@ -71,7 +76,9 @@ int main(int argc, char** argv) {
             const double r_c_um = ex.opt<double>("query-radius-um", 20.0, "query-cylinder radius r_c [um]");
             const bool diffraction =
                 ex.opt<bool>("diffraction", false, "off: Guo21's -FD (ray optics, C_t = pi r^2); on: with Fraunhofer diffraction");
+            ex.checkpointable();
             ex.ready();
+            guo21_mpi::quiet_other_ranks(ex);
             if (width < 8 || width > 8192) throw gl_examples::cli_error("--width must be in [8, 8192]");
             if (spp < 1 || spp > 65536) throw gl_examples::cli_error("--spp must be in [1, 65536]");
             if (!(count >= 1000 && count < 4000000000ull)) throw gl_examples::cli_error("--count must be in [1000, 4e9)");
@@ -145,8 +152,11 @@ int main(int argc, char** argv) {
                 build_scene(dsc, dsc.add_medium(DMed(grid, {model}, ms)));
                 const DMed& dm = dsc.medium(0);
                 auto bar_d = ex.progress("discrete " + tag_of(eta_i), std::uint64_t(height));
-                const gl::Image di =
-                    gl::render_discrete_vpt(dsc, camera, opt, [&](int n) { bar_d.advance(std::uint64_t(n)); }).image();
+                // Every render: this rank's rows, its checkpoint, gathered on every rank (guo21_mpi_render.hpp).
+                const gl::Image di = guo21_mpi::render_image(
+                    ex, opt, "discrete_" + tag_of(eta_i),
+                    [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_discrete_vpt(dsc, camera, o, prog); },
+                    [&](int n) { bar_d.advance(std::uint64_t(n)); });
                 bar_d.done();
                 const double sec_d = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -163,7 +173,10 @@ int main(int argc, char** argv) {
                 gl::Scene<CMed> csc;
                 build_scene(csc, csc.add_medium(CMed(float(sigma_t), float(albedo_p), cp.phase)));
                 auto bar_c = ex.progress("continuous " + tag_of(eta_i), std::uint64_t(height));
-                const gl::Image ci = gl::render_vpt(csc, camera, opt, [&](int n) { bar_c.advance(std::uint64_t(n)); }).image();
+                const gl::Image ci = guo21_mpi::render_image(
+                    ex, opt, "continuous_" + tag_of(eta_i),
+                    [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_vpt(csc, camera, o, prog); },
+                    [&](int n) { bar_c.advance(std::uint64_t(n)); });
                 bar_c.done();
                 const double sec_c = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
 
@@ -171,7 +184,9 @@ int main(int argc, char** argv) {
                 // membership_extinction_factor, albedo unchanged.
                 gl::Scene<CMed> fsc;
                 build_scene(fsc, fsc.add_medium(CMed(float(sigma_t * factor), float(albedo_p), cp.phase_factor)));
-                const gl::Image cf = gl::render_vpt(fsc, camera, opt, [](int) {}).image();
+                const gl::Image cf = guo21_mpi::render_image(
+                    ex, opt, "membership_" + tag_of(eta_i),
+                    [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_vpt(fsc, camera, o, prog); }, [](int) {});
                 const double md = di.mean(0), mc = ci.mean(0), mcf = cf.mean(0);
                 v_mcf.push_back(mcf);
                 v_rdf.push_back(md / mcf - 1);
@@ -193,11 +208,13 @@ int main(int argc, char** argv) {
                 csv.row({eta_i, albedo_bulk, albedo_p, sigma_t, sigma_t_bulk, factor, md, mc, md / mc - 1, mcf, md / mcf - 1, ca_goa, ca_eq13,
                          sec_d, sec_c});
                 const std::string tag = tag_of(eta_i);
+                if (!ex.root()) continue;  // only rank 0 writes
                 gl::write_exr(out / ("discrete_" + tag + ".exr"), di);
                 gl::write_png(out / ("discrete_" + tag + ".png"), di, {ev});
                 gl::write_exr(out / ("continuous_" + tag + ".exr"), ci);
                 gl::write_png(out / ("continuous_" + tag + ".png"), ci, {ev});
             }
+            if (!ex.root()) return ex.finish({});
             const auto csv_path = ex.csv("guo21_fig18_absorption.csv", csv);
             ex.plot("guo21_fig18_absorption", csv_path, out / "guo21_fig18_absorption.png");
 
@@ -243,6 +260,7 @@ int main(int argc, char** argv) {
                 .num("max_abs_rel_diff_membership", max_abs_rdf)
                 .num("mean_discrete_last_over_first", v_md.back() / v_md.front())
                 .str("csv", csv_path.string());
+            guo21_mpi::rank_rows(j, ex, height);
             (void)full;
             return ex.finish(j);
         });

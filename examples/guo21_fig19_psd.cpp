@@ -14,7 +14,10 @@
 // graininess is that of a pixel-sized fat ray; the membership factor is printed).
 //
 //   guo21_fig19_psd [--quality quick|full] [--out DIR] [--seed S] [--threads N] [--spp N]
-//                   [--width W] [--count N] [--k K] [--diffraction on|off]
+//                   [--width W] [--count N] [--k K] [--diffraction on|off] [--checkpoint SECONDS] [--resume]
+//
+// Every render is split by rows over MPI ranks (mpirun -np K: byte-identical EXRs) and resumable
+// (--checkpoint / --resume: one checkpoint per render in --out).
 //
 // Paper: scattering grows with r_g (sigma_s grows with the radius); a larger sigma_g gives
 // stronger graininess; the bimodal cloud shows haze from the small and grains from the large
@@ -34,6 +37,7 @@
 
 #include "common/harness.hpp"
 #include "guo21_cube_scene.hpp"
+#include "guo21_mpi_render.hpp"
 #include "grainlight/integrators/discrete_vpt.hpp"
 #include "grainlight/integrators/render.hpp"
 #include "grainlight/media/discrete_particles.hpp"
@@ -72,7 +76,9 @@ int main(int argc, char** argv) {
             const double k_q = ex.opt<double>("k", 0.25, "query-cylinder scale k of Eq. 23 (r_c = k/2 x the pixel footprint at the cube)");
             const bool diffraction =
                 ex.opt<bool>("diffraction", false, "off: Guo21's -FD (ray optics, C_t = pi r^2); on: with Fraunhofer diffraction");
+            ex.checkpointable();
             ex.ready();
+            guo21_mpi::quiet_other_ranks(ex);
             if (width < 8 || width > 8192) throw gl_examples::cli_error("--width must be in [8, 8192]");
             if (spp < 1 || spp > 65536) throw gl_examples::cli_error("--spp must be in [1, 65536]");
             if (!(count >= 1000 && count < 800000000ull)) throw gl_examples::cli_error("--count must be in [1000, 8e8)");
@@ -145,12 +151,13 @@ int main(int argc, char** argv) {
                 // Two seeded halves of the spp on the same particles: their difference is the render's own
                 // Monte Carlo noise, which the graininess estimate removes.
                 auto bar_d = ex.progress("discrete " + pc.name, std::uint64_t(2 * height));
-                const gl::Image d1 =
-                    gl::render_discrete_vpt(dsc, camera, opt, [&](int n) { bar_d.advance(std::uint64_t(n)); }).image();
+                // Every render: this rank's rows, its checkpoint, gathered on every rank (guo21_mpi_render.hpp).
+                auto dvpt = [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_discrete_vpt(dsc, camera, o, prog); };
+                auto prog_d = [&](int n) { bar_d.advance(std::uint64_t(n)); };
+                const gl::Image d1 = guo21_mpi::render_image(ex, opt, "discrete_" + pc.name + ".a", dvpt, prog_d);
                 gl::RenderOptions od2 = opt;
                 od2.seed = opt.seed + 2000003;
-                const gl::Image d2 =
-                    gl::render_discrete_vpt(dsc, camera, od2, [&](int n) { bar_d.advance(std::uint64_t(n)); }).image();
+                const gl::Image d2 = guo21_mpi::render_image(ex, od2, "discrete_" + pc.name + ".b", dvpt, prog_d);
                 bar_d.done();
                 gl::Image di = d1;
                 for (std::size_t i = 0; i < di.rgb.size(); ++i) di.rgb[i] = 0.5f * (d1.rgb[i] + d2.rgb[i]);
@@ -171,10 +178,12 @@ int main(int argc, char** argv) {
                 auto bar_c = ex.progress("continuous " + pc.name, std::uint64_t(2 * height));
                 gl::RenderOptions o1 = opt;
                 o1.spp = 4 * opt.spp;
-                const gl::Image c1 = gl::render_vpt(csc, camera, o1, [&](int n) { bar_c.advance(std::uint64_t(n)); }).image();
+                auto cvpt = [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_vpt(csc, camera, o, prog); };
+                auto prog_c = [&](int n) { bar_c.advance(std::uint64_t(n)); };
+                const gl::Image c1 = guo21_mpi::render_image(ex, o1, "continuous_" + pc.name + ".a", cvpt, prog_c);
                 gl::RenderOptions o2 = o1;
                 o2.seed = opt.seed + 1000003;
-                const gl::Image c2 = gl::render_vpt(csc, camera, o2, [&](int n) { bar_c.advance(std::uint64_t(n)); }).image();
+                const gl::Image c2 = guo21_mpi::render_image(ex, o2, "continuous_" + pc.name + ".b", cvpt, prog_c);
                 bar_c.done();
                 // The membership rule's prediction: the Poisson average of T_A is Beer-Lambert with each
                 // particle's extinction scaled by membership_extinction_factor (scattering alike, albedo
@@ -182,7 +191,9 @@ int main(int argc, char** argv) {
                 // average of the discrete render.
                 gl::Scene<CMed> fsc;
                 build_scene(fsc, fsc.add_medium(CMed(float(sigma_t * factor), float(albedo), phase_f)));
-                const gl::Image cf = gl::render_vpt(fsc, camera, o1, [](int) {}).image();
+                const gl::Image cf = guo21_mpi::render_image(
+                    ex, o1, "membership_" + pc.name,
+                    [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_vpt(fsc, camera, o, prog); }, [](int) {});
                 gl::Image ci = c1;
                 for (std::size_t i = 0; i < ci.rgb.size(); ++i) ci.rgb[i] = 0.5f * (c1.rgb[i] + c2.rgb[i]);
                 const double g_bulk = pc.bulk(model, wl).channels[0].g;
@@ -224,11 +235,13 @@ int main(int argc, char** argv) {
                 }
                 // Each image exposed for its own continuous mean (the look, not the brightness, is compared).
                 const double ev_c = std::log2(0.18 / std::max(mc, 1e-12));
+                if (!ex.root()) continue;  // only rank 0 writes
                 gl::write_exr(out / ("discrete_" + pc.name + ".exr"), di);
                 gl::write_png(out / ("discrete_" + pc.name + ".png"), di, {ev_c});
                 gl::write_exr(out / ("continuous_" + pc.name + ".exr"), ci);
                 gl::write_png(out / ("continuous_" + pc.name + ".png"), ci, {ev_c});
             }
+            if (!ex.root()) return ex.finish({});
             const auto csv_path = ex.csv("guo21_fig19_psd.csv", csv);
             ex.plot("guo21_fig19_psd", csv_path, out / "guo21_fig19_psd.png");
 
@@ -283,6 +296,7 @@ int main(int argc, char** argv) {
                 .num("max_abs_rel_diff_membership", max_abs_rdf)
                 .num("max_abs_g_minus_no_diffraction_prediction", max_g_dev)
                 .str("csv", csv_path.string());
+            guo21_mpi::rank_rows(j, ex, height);
             return ex.finish(j);
         });
 }

@@ -8,7 +8,10 @@
 // look through the cloud, in one run on the same scene.
 //
 //   guo21_fig20_time_vs_n [--quality quick|full] [--out DIR] [--seed S] [--threads N] [--spp N]
-//                         [--width W] [--counts 1e4,1e5,...] [--rc-over-rp F]
+//                         [--width W] [--counts 1e4,1e5,...] [--rc-over-rp F] [--checkpoint SECONDS] [--resume]
+//
+// Every render is split by rows over MPI ranks and resumable (--checkpoint / --resume: one
+// checkpoint per batch in --out); CPU seconds are the renders' process CPU time summed over ranks.
 //
 // Paper: ours ~1.2x faster than EPT at N = 1e5 (Table 1), 2x at N = 1e6, the gain growing with N
 // (Fig. 20; its EPT traverses explicit spheres in a BVH). Last stdout line: JSON with lists N,
@@ -42,7 +45,9 @@ int main(int argc, char** argv) {
             const std::vector<double> counts = ex.opt<std::vector<double>>("counts", {1e4, 3e4, 1e5, 3e5, 1e6},
                                                                            {1e4, 3e4, 1e5, 3e5, 1e6, 3e6}, "particle counts");
             const double rc_over_rp = ex.opt<double>("rc-over-rp", 0.05, "query radius r_c / r_p");
+            ex.checkpointable();
             ex.ready();
+            guo21_mpi::quiet_other_ranks(ex);
             if (width < 8 || width > 8192) throw gl_examples::cli_error("--width must be in [8, 8192]");
             if (spp < 8 || spp > 65536) throw gl_examples::cli_error("--spp must be in [8, 65536]");
             if (counts.empty()) throw gl_examples::cli_error("--counts needs at least one value");
@@ -85,7 +90,7 @@ int main(int argc, char** argv) {
                     using M = gl::ExplicitSphereMedium<float>;
                     gl::Scene<M> sc;
                     guo21_cornell::build_cornell(sc, sc.add_medium(M(grid, 1.31f)), 1.5 * r_p);
-                    ept = guo21_cornell::render_scene_batches(batches, opt, mask, "EPT " + tag, width, sc, camera);
+                    ept = guo21_cornell::render_scene_batches(ex, batches, opt, mask, "EPT " + tag, width, sc, camera);
                 }
                 double bytes_pp = 0;
                 auto ours = [&](bool diffraction, const std::string& label) {
@@ -99,7 +104,7 @@ int main(int argc, char** argv) {
                     gl::Scene<M> sc;
                     guo21_cornell::build_cornell(sc, sc.add_medium(M(grid, {model}, ms)), 1.5 * r_p + r_c);
                     bytes_pp = double(sc.medium(0).memory_bytes()) / double(N);
-                    return guo21_cornell::render_scene_batches(batches, opt, mask, label + " " + tag, width, sc, camera);
+                    return guo21_cornell::render_scene_batches(ex, batches, opt, mask, label + " " + tag, width, sc, camera);
                 };
                 const auto o = ours(true, "ours");
                 const auto f = ours(false, "ours -FD");
@@ -128,6 +133,7 @@ int main(int argc, char** argv) {
                 csv.row({double(N), ept.cpu_seconds, o.cpu_seconds, f.cpu_seconds, v_ratio.back(), v_ratio_fd.back(), v_tt.back(),
                          v_tt_fd.back(), me, mo, mf, mf / me - 1, se, bytes_pp});
             }
+            if (!ex.root()) return ex.finish({});  // only rank 0 writes
             const auto csv_path = ex.csv("guo21_fig20_time_vs_n.csv", csv);
             ex.plot("guo21_fig20_time_vs_n", csv_path, ex.out() / "guo21_fig20_time_vs_n.png");
             double max_z = 0;
@@ -169,7 +175,9 @@ int main(int argc, char** argv) {
                 .num("bytes_per_particle_max", *std::max_element(v_bpp.begin(), v_bpp.end()))
                 .num("paper_time_ratio_1e5", 1.2)
                 .num("paper_time_ratio_1e6", 2.0)
-                .str("csv", csv_path.string());
+                .str("csv", csv_path.string())
+                .str("cpu_seconds_note", "process CPU seconds of the renders, summed over the ranks");
+            guo21_mpi::rank_rows(j, ex, width);
             return ex.finish(j);
         });
 }

@@ -9,6 +9,10 @@
 // (1.31) except STAIRCASE (1.5, Fig. 18). Counts: the paper's at full; at quick at most 3e5.
 //
 //   guo21_table1 [--quality quick|full] [--out DIR] [--seed S] [--threads N] [--spp N] [--width W]
+//                [--checkpoint SECONDS] [--resume]
+//
+// Every render is split by rows over MPI ranks and resumable (--checkpoint / --resume); CPU seconds
+// are the renders' process CPU time summed over the ranks.
 //
 // Printed beside the paper's minutes and memory (its spp, its machine): our render CPU seconds of
 // both methods (ours' per-bin optics tables, computed once per scene, are reported apart), the ratio EPT / ours (paper: 1.2x for LAMP and CORNELL) and our memory (cloud + grid).
@@ -25,6 +29,7 @@
 #include <vector>
 
 #include "common/harness.hpp"
+#include "guo21_mpi_render.hpp"
 #include "grainlight/integrators/discrete_vpt.hpp"
 #include "grainlight/integrators/render.hpp"
 #include "grainlight/media/discrete_particles.hpp"
@@ -63,7 +68,9 @@ int main(int argc, char** argv) {
         [&](gl_examples::Example& ex) -> int {
             const int spp = ex.opt<int>("spp", 128, 1024, "samples per pixel (both methods)");
             const int width = ex.opt<int>("width", 128, 256, "image width (height = 3/4 width)");
+            ex.checkpointable();
             ex.ready();
+            guo21_mpi::quiet_other_ranks(ex);
             if (width < 8 || width > 8192) throw gl_examples::cli_error("--width must be in [8, 8192]");
             if (spp < 1 || spp > 65536) throw gl_examples::cli_error("--spp must be in [1, 65536]");
             const bool full = ex.full();
@@ -114,10 +121,13 @@ int main(int argc, char** argv) {
                     gl::Scene<M> sc;
                     build_scene(sc, sc.add_medium(M(grid, float(row.eta))));
                     auto bar = ex.progress("EPT " + row.scene, std::uint64_t(height));
-                    const std::clock_t c0 = std::clock();
-                    const gl::Image img =
-                        gl::render_discrete_vpt(sc, camera, opt, [&](int n) { bar.advance(std::uint64_t(n)); }).image();
-                    cpu_e = double(std::clock() - c0) / CLOCKS_PER_SEC;
+                    // This rank's rows, its checkpoint, gathered on every rank; CPU seconds summed over ranks.
+                    guo21_mpi::RankClock clock;
+                    const gl::Image img = guo21_mpi::render_image(
+                        ex, opt, "ept_" + std::to_string(k),
+                        [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_discrete_vpt(sc, camera, o, prog); },
+                        [&](int n) { bar.advance(std::uint64_t(n)); }, &clock);
+                    cpu_e = guo21_mpi::sum_over_ranks(ex.mpi(), clock.cpu);
                     bar.done();
                     mean_e = img.mean(0);
                 }
@@ -135,11 +145,13 @@ int main(int argc, char** argv) {
                     build_scene(sc, sc.add_medium(M(grid, {model}, ms)));
                     setup_o = double(std::clock() - c1) / CLOCKS_PER_SEC;  // per-bin optics tables, reported apart
                     mem = double(sc.medium(0).memory_bytes());
-                    const std::clock_t c0 = std::clock();
                     auto bar = ex.progress("ours " + row.scene, std::uint64_t(height));
-                    const gl::Image img =
-                        gl::render_discrete_vpt(sc, camera, opt, [&](int n) { bar.advance(std::uint64_t(n)); }).image();
-                    cpu_o = double(std::clock() - c0) / CLOCKS_PER_SEC;
+                    guo21_mpi::RankClock clock;
+                    const gl::Image img = guo21_mpi::render_image(
+                        ex, opt, "ours_" + std::to_string(k),
+                        [&](const gl::RenderOptions& o, auto&& prog) { return gl::render_discrete_vpt(sc, camera, o, prog); },
+                        [&](int n) { bar.advance(std::uint64_t(n)); }, &clock);
+                    cpu_o = guo21_mpi::sum_over_ranks(ex.mpi(), clock.cpu);
                     bar.done();
                     mean_o = img.mean(0);
                 }
@@ -168,6 +180,7 @@ int main(int argc, char** argv) {
                 p_ours.push_back(row.paper_ours_min);
             }
             names += "]";
+            if (!ex.root()) return ex.finish({});  // only rank 0 writes
             ex.csv("guo21_table1.csv", csv);
             std::printf("  paper: ours 1.2x faster than EPT for LAMP and CORNELL BOX (minutes at the paper's spp on its "
                         "machine; memory incl. the scene); ours: equal-spp CPU time on stand-in scenes, memory = cloud + grid\n");
@@ -189,7 +202,9 @@ int main(int argc, char** argv) {
                 .nums("paper_memory_mb", p_mem)
                 .nums("paper_ept_minutes", p_ept)
                 .nums("paper_ours_minutes", p_ours)
-                .num("bytes_per_particle_max", *std::max_element(v_bpp.begin(), v_bpp.end()));
+                .num("bytes_per_particle_max", *std::max_element(v_bpp.begin(), v_bpp.end()))
+                .str("cpu_seconds_note", "process CPU seconds of the renders, summed over the ranks");
+            guo21_mpi::rank_rows(j, ex, height);
             return ex.finish(j);
         });
 }

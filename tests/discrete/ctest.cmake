@@ -233,3 +233,14 @@ if(TARGET guo21_fig10_lamp)
   set_tests_properties(guo21_fig10_lamp_bad_count PROPERTIES PASS_REGULAR_EXPRESSION "count")
   set_tests_properties(guo21_fig10_lamp_json guo21_fig10_lamp_bad_count PROPERTIES LABELS "example;discrete")
 endif()
+
+# MPI scale-out (issue 14 item 2): a Guo21 render split by rows over 2 ranks and gathered gives the
+# single-process EXR byte for byte (ours with diffraction, the discrete medium; 1e4 particles).
+if(TARGET MPI::MPI_CXX AND MPIEXEC_EXECUTABLE AND TARGET guo21_fig12_cornell)
+  add_test(NAME guo21_fig12_cornell_mpi
+           COMMAND bash ${PROJECT_SOURCE_DIR}/tests/common/mpi_compare.sh ${MPIEXEC_EXECUTABLE} 2
+                   ${CMAKE_CURRENT_BINARY_DIR}/mpi_guo21_work ours.exr $<TARGET_FILE:guo21_fig12_cornell>
+                   --quality quick --seed 1 --paper-k 0 --width 24 --spp 16 --batches 2 --count 10000)
+  set_tests_properties(guo21_fig12_cornell_mpi PROPERTIES LABELS "example;discrete;mpi" TIMEOUT 120
+    PASS_REGULAR_EXPRESSION "byte-identical to one process")
+endif()
