@@ -8,6 +8,9 @@
 /// (power heuristic) against phase sampling for area lights. Surfaces: VptCallbacks (emission
 /// with MIS, NEE at diffuse surfaces). Media without `particle_at` (the explicit-sphere EPT
 /// reference) get no NEE at their events, like any medium that chooses its own directions.
+/// Shadow rays at particle events are Russian-rouletted by the phase value toward the light
+/// (DiscreteVptCallbacks::nee_roulette): a shadow gather costs as much as a free flight, and most
+/// light directions of a forward-peaked particle phase carry little (docs/guo21.md, Fig. 20).
 #pragma once
 
 #include "grainlight/integrators/render.hpp"
@@ -27,6 +30,11 @@ struct DiscreteVptCallbacks : VptCallbacks<Scene> {
     using F = typename Scene::Float;
     /// Spectrum type (the scene's).
     using S = typename Scene::Spectrum;
+    /// Russian roulette of the NEE shadow rays at particle events: a shadow ray toward a light
+    /// direction w is traced with probability min(1, nee_roulette 4 pi f(w)) (f the particle's
+    /// normalised phase: directions where it is below isotropic / nee_roulette are sampled), its
+    /// contribution divided by that probability. 0: every shadow ray is traced.
+    F nee_roulette = F(1);
 
     template <class M>
     /// Walk callback at a scattering event of medium m: when NEE is on, the medium chose the
@@ -46,19 +54,34 @@ struct DiscreteVptCallbacks : VptCallbacks<Scene> {
                 const auto pe = m.phase_eval(i, d, w);
                 f = pe.value;
                 pdf = pe.pdf;
-                return pdf > F(0);
+                if (!(pdf > F(0))) return false;
+                // Russian roulette on the shadow ray (its gather costs as much as a free flight):
+                // kept with probability min(1, nee_roulette * 4 pi f), weight 1 / probability.
+                // Unbiased (the NEE estimate keeps its expectation, so MIS stays valid); a surviving
+                // contribution is at most that of an isotropic scatterer / nee_roulette.
+                if (nee_roulette > F(0)) {
+                    const F keep = nee_roulette * F(4) * pi_v<F> * f.max_value();
+                    if (keep < F(1)) {
+                        if (!(this->rng.template uniform<F>() < keep)) return false;
+                        f = f * (F(1) / keep);
+                    }
+                }
+                return true;
             });
         }
         return true;
     }
 };
 
-/// Radiance along a camera ray starting in medium `medium`.
+/// Radiance along a camera ray starting in medium `medium`; `nee_roulette` as
+/// DiscreteVptCallbacks::nee_roulette (1: the default; 0: every shadow ray traced).
 template <LitScene Scene>
     requires Medium<typename Scene::Medium>
 [[nodiscard]] inline typename Scene::Spectrum discrete_vpt_radiance(const Scene& scene, const Ray<typename Scene::Float>& ray,
-                                                                    int medium, Rng& rng, const VptOptions& opt = {}) noexcept {
+                                                                    int medium, Rng& rng, const VptOptions& opt = {},
+                                                                    typename Scene::Float nee_roulette = 1) noexcept {
     DiscreteVptCallbacks<Scene> cb{{scene, rng, opt}};
+    cb.nee_roulette = nee_roulette;
     return camera_walk(scene, ray, medium, rng, opt, cb);
 }
 
