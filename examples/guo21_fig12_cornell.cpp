@@ -248,26 +248,26 @@ int main(int argc, char** argv) {
         const double m_ept = masked_mean(ept.img, mask), m_ours = masked_mean(ours.img, mask), m_fd = masked_mean(ours_fd.img, mask);
         const double m_k05 = masked_mean(fd_k05.img, mask), m_k1 = masked_mean(fd_k1.img, mask);
         const double ev = std::log2(0.18 / std::max(m_ept, 1e-12));
-        if (ex.root()) {
-        gl::write_exr(out / "ept.exr", ept.img);
-        gl::write_png(out / "ept.png", ept.img, {ev});
-        gl::write_exr(out / "ours.exr", ours.img);
-        gl::write_png(out / "ours.png", ours.img, {ev});
-        gl::write_exr(out / "ours_no_diffraction.exr", ours_fd.img);
-        gl::write_png(out / "ours_no_diffraction.png", ours_fd.img, {ev});
-        gl::write_exr(out / "fd_only.exr", fd_only);
-        gl::write_png(out / "fd_only.png", fd_only, {ev + 3});
-        gl::write_png(out / "ours_no_diffraction_k05.png", fd_k05.img, {ev});
-        gl::write_png(out / "ours_no_diffraction_k1.png", fd_k1.img, {ev});
-        if (spectral) {
-            const double evs = std::log2(0.18 / std::max(sp_ept.mean_luminance, 1e-12));
-            gl::write_exr(out / "ept_spectral.exr", sp_ept.img);
-            gl::write_png(out / "ept_spectral.png", sp_ept.img, {evs});
-            gl::write_exr(out / "ours_spectral.exr", sp_ours.img);
-            gl::write_png(out / "ours_spectral.png", sp_ours.img, {evs});
-            gl::write_exr(out / "ours_no_diffraction_spectral.exr", sp_fd.img);
-            gl::write_png(out / "ours_no_diffraction_spectral.png", sp_fd.img, {evs});
-        }
+        if (ex.root()) {  // only rank 0 writes
+            gl::write_exr(out / "ept.exr", ept.img);
+            gl::write_png(out / "ept.png", ept.img, {ev});
+            gl::write_exr(out / "ours.exr", ours.img);
+            gl::write_png(out / "ours.png", ours.img, {ev});
+            gl::write_exr(out / "ours_no_diffraction.exr", ours_fd.img);
+            gl::write_png(out / "ours_no_diffraction.png", ours_fd.img, {ev});
+            gl::write_exr(out / "fd_only.exr", fd_only);
+            gl::write_png(out / "fd_only.png", fd_only, {ev + 3});
+            gl::write_png(out / "ours_no_diffraction_k05.png", fd_k05.img, {ev});
+            gl::write_png(out / "ours_no_diffraction_k1.png", fd_k1.img, {ev});
+            if (spectral) {
+                const double evs = std::log2(0.18 / std::max(sp_ept.mean_luminance, 1e-12));
+                gl::write_exr(out / "ept_spectral.exr", sp_ept.img);
+                gl::write_png(out / "ept_spectral.png", sp_ept.img, {evs});
+                gl::write_exr(out / "ours_spectral.exr", sp_ours.img);
+                gl::write_png(out / "ours_spectral.png", sp_ours.img, {evs});
+                gl::write_exr(out / "ours_no_diffraction_spectral.exr", sp_fd.img);
+                gl::write_png(out / "ours_no_diffraction_spectral.png", sp_fd.img, {evs});
+            }
         }
 
         // Predicted mean-extinction factor of the membership rule for -FD (C_t = pi r_p^2):
