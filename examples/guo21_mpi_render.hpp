@@ -140,9 +140,7 @@ inline void quiet_other_ranks(const gl_examples::Example& ex) {
 /// The JSON fields every Guo21 render reports about its split: which rows each rank renders and
 /// how many.
 inline void rank_rows(gl_examples::Json& j, const gl_examples::Example& ex, int height) {
-    std::vector<double> counts;
-    for (int r = 0; r < ex.ranks(); ++r) counts.push_back(double((height - r + ex.ranks() - 1) / ex.ranks()));
-    j.str("rank_rows", "rank r renders the rows y with y % ranks == r").nums("rank_row_counts", counts);
+    j.str("rank_rows", "rank r renders the rows y with y % ranks == r").nums("rank_row_counts", ex.mpi().row_counts(height));
 }
 
 }  // namespace guo21_mpi

@@ -527,14 +527,15 @@ TEST_CASE("-FD is ray optics: C_t = pi r^2 and no Fraunhofer peak", "[discrete][
 
 TEST_CASE("NEE roulette at particle events is unbiased: the same mean as tracing every shadow ray", "[discrete][nee]") {
     // Two estimators of one scene that must agree: a slab of 1 mm spheres (GOA, m = 1.31; r_c = r_p / 20,
-    // opaque members as in Guo21 Fig. 12) in the dark under one small quad light, seen from the side
-    // (light scattered by ~90 deg, where the phase is below isotropic and the roulette acts), rendered with
+    // opaque members as in Guo21 Fig. 12; mean free path 0.16 m, so most light is scattered more than
+    // once and the roulette, which starts at a path's second event, acts) in the dark under one small
+    // quad light, seen from the side (light scattered by ~90 deg, where the phase is below isotropic), rendered with
     // every NEE shadow ray traced (nee_roulette = 0) and with the phase-value roulette (1), independent
-    // seeds. Their image means agree within 4 standard errors (from the pixel scatter of the difference
+    // seeds. Their image means agree within 3 standard errors (from the pixel scatter of the difference
     // image, in which the scene's structure cancels).
     const gl::BoxBoundary box(Vec3d(-0.3, 0.0, -0.3), Vec3d(0.3, 0.3, 0.3));
     auto cloud = std::make_shared<gl::ParticleCloud>(
-        gl::ParticleCloud::generate(box, 20000, {gl::cloud_species(gl::MonodispersePsd(1000))}, 11, 1e6));
+        gl::ParticleCloud::generate(box, 200000, {gl::cloud_species(gl::MonodispersePsd(1000))}, 11, 1e6));
     const double rc = 5e-5;
     gl::ParticleGridSettings gs;
     gs.dilation = rc;
@@ -554,7 +555,7 @@ TEST_CASE("NEE roulette at particle events is unbiased: the same mean as tracing
     const gl::PinholeCamera<float> cam(Vec3f(0.0f, 0.5f, 1.4f), Vec3f(0.0f, 0.15f, 0.0f), Vec3f(0, 1, 0), 30.0f, 16, 16);
     auto render = [&](float roulette, std::uint64_t seed) {
         gl::RenderOptions opt;
-        opt.spp = 1024;
+        opt.spp = 2048;
         opt.seed = seed;
         opt.vpt.max_depth = 256;
         return gl::render_image(
@@ -571,6 +572,6 @@ TEST_CASE("NEE roulette at particle events is unbiased: the same mean as tracing
     const double mean = sa / 256, md = sd / 256, se = std::sqrt((sd2 / 256 - md * md) / 255);
     INFO("all shadow rays: mean " << mean << "; roulette - all " << md << " +- " << se);
     CHECK(mean > 0);
-    CHECK(std::abs(md) < 4 * se);
+    CHECK(std::abs(md) < 3 * se);  // fixed seeds: measured 0.5 se; without the 1 / p weight: 4.0 se
     CHECK(se < 0.1 * mean);
 }

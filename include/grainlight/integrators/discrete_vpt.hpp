@@ -8,9 +8,10 @@
 /// (power heuristic) against phase sampling for area lights. Surfaces: VptCallbacks (emission
 /// with MIS, NEE at diffuse surfaces). Media without `particle_at` (the explicit-sphere EPT
 /// reference) get no NEE at their events, like any medium that chooses its own directions.
-/// Shadow rays at particle events are Russian-rouletted by the phase value toward the light
-/// (DiscreteVptCallbacks::nee_roulette): a shadow gather costs as much as a free flight, and most
-/// light directions of a forward-peaked particle phase carry little (docs/guo21.md, Fig. 20).
+/// Shadow rays at particle events after the first are Russian-rouletted by the phase value toward
+/// the light (DiscreteVptCallbacks::nee_roulette): a shadow gather costs as much as a free flight,
+/// and most light directions of a forward-peaked particle phase carry little (docs/guo21.md,
+/// Fig. 20).
 #pragma once
 
 #include "grainlight/integrators/render.hpp"
@@ -30,10 +31,12 @@ struct DiscreteVptCallbacks : VptCallbacks<Scene> {
     using F = typename Scene::Float;
     /// Spectrum type (the scene's).
     using S = typename Scene::Spectrum;
-    /// Russian roulette of the NEE shadow rays at particle events: a shadow ray toward a light
-    /// direction w is traced with probability min(1, nee_roulette 4 pi f(w)) (f the particle's
-    /// normalised phase: directions where it is below isotropic / nee_roulette are sampled), its
-    /// contribution divided by that probability. 0: every shadow ray is traced.
+    /// Russian roulette of the NEE shadow rays at particle events after the path's first event
+    /// (depth >= 2): a shadow ray toward a light direction w is traced with probability
+    /// min(1, nee_roulette 4 pi f(w)) (f the particle's normalised phase: directions where it is
+    /// below isotropic / nee_roulette are sampled), its contribution divided by that probability.
+    /// At the first event every shadow ray is traced (single scattering, the whole image of a thin
+    /// medium seen from the side, would otherwise pay the roulette's variance). 0: always traced.
     F nee_roulette = F(1);
 
     template <class M>
@@ -56,10 +59,12 @@ struct DiscreteVptCallbacks : VptCallbacks<Scene> {
                 pdf = pe.pdf;
                 if (!(pdf > F(0))) return false;
                 // Russian roulette on the shadow ray (its gather costs as much as a free flight):
-                // kept with probability min(1, nee_roulette * 4 pi f), weight 1 / probability.
-                // Unbiased (the NEE estimate keeps its expectation, so MIS stays valid); a surviving
-                // contribution is at most that of an isotropic scatterer / nee_roulette.
-                if (nee_roulette > F(0)) {
+                // kept with probability min(1, nee_roulette * 4 pi f), weight 1 / probability, from
+                // the second event of the path on (the first one, the single scattering a thin
+                // medium shows, keeps every shadow ray). Unbiased (the NEE estimate keeps its
+                // expectation, so MIS stays valid); a surviving contribution is at most that of an
+                // isotropic scatterer / nee_roulette.
+                if (nee_roulette > F(0) && st.depth >= 2) {
                     const F keep = nee_roulette * F(4) * pi_v<F> * f.max_value();
                     if (keep < F(1)) {
                         if (!(this->rng.template uniform<F>() < keep)) return false;
