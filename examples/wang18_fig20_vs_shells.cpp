@@ -280,6 +280,7 @@ int main(int argc, char** argv) {
             const int rank = ex.opt<int>("shell-rank", 6, 8, "NMF terms of the shell tables (paper 4-6)");
             const int shell_paths = ex.opt<int>("shell-paths", 60000, 400000, "paths per shell table");
             const int nmf_iter = ex.opt<int>("nmf-iterations", 150, 400, "NMF multiplicative-update iterations");
+            const double eps1 = ex.opt<double>("eps1", 1.0, 0.2, "Alg. 1 solid-angle threshold eps1 (sr); eps2 = eps1 / 5");
             const double large = ex.opt<double>("large-factor", 4.0, 6.0, "memory of the large shell table / MS table memory (paper: 'increasing the memory')");
             ex.checkpointable();
             ex.ready();
@@ -298,6 +299,7 @@ int main(int argc, char** argv) {
             if (rank < 1 || rank > 64) throw cli_error("--shell-rank = " + std::to_string(rank) + " must be in [1, 64]");
             if (shell_paths < 1000 || shell_paths > 100000000) throw cli_error("--shell-paths must be in [1e3, 1e8]");
             if (nmf_iter < 10 || nmf_iter > 10000) throw cli_error("--nmf-iterations must be in [10, 1e4]");
+            if (!(eps1 > 0 && eps1 <= 10)) throw cli_error("--eps1 = " + std::to_string(eps1) + " must be in (0, 10]");
             if (!(large >= 1 && large <= 100)) throw cli_error("--large-factor = " + std::to_string(large) + " must be in [1, 100]");
             const bool full = ex.full();
             const auto& out = ex.out();
@@ -336,6 +338,8 @@ int main(int argc, char** argv) {
             const double cpu_table = wang18::cpu_seconds() - c0;
             const std::size_t table_bytes = table.bytes();
             gl::PointBasedOptions<float> po = wang18::default_options(sc, full);
+            po.cut.eps1 = float(eps1);
+            po.cut.eps2 = 0.2f * float(eps1);
             po.bounce_samples = 0;  // the multiple term only (Eq. 8's bounced term is not compared)
             const wang18::PbRun pb = wang18::render_pb(ex, sc, &table, po, n_surface, seed, "fig20 point-based", rays);
 
@@ -396,7 +400,10 @@ int main(int argc, char** argv) {
             const Errors e_lg = errors(run_lg.img, &run_lg.var_mean, ref, ref_var, c.ref[2], c.ref_se[2]);
 
             if (!ex.root()) return ex.finish({});  // rank 0 writes and prints
-            const double exposure = std::log2(0.3 / std::max(c.ref[2], 1e-12));  // the VPT mean at 0.3 (stops)
+            // Exposure (stops): the VPT's brightest channel mean over the object's pixels at 0.3.
+            double ch_max = 0;
+            for (int ch = 0; ch < 3; ++ch) ch_max = std::max(ch_max, ref.mean(ch));
+            const double exposure = std::log2(0.3 * 0.5 / std::max(ch_max, 1e-12));  // the sphere covers ~half the pixels
             wang18::save_image(ex, "wang18_fig20_table_multiple", pb.img[2], exposure);
             wang18::save_image(ex, "wang18_fig20_shells_equal_multiple", run_eq.img, exposure);
             wang18::save_image(ex, "wang18_fig20_shells_large_multiple", run_lg.img, exposure);
@@ -461,7 +468,7 @@ int main(int argc, char** argv) {
 
             gl_examples::Json j = ex.summary();
             wang18::put_rank_rows(ex, j, W);
-            j.integer("width", W).integer("vpt_spp", vpt_spp).integer("shell_spp", shell_spp).num("g", g);
+            j.integer("width", W).num("eps1", eps1).integer("table_theta", n_theta).integer("table_phi", n_phi).integer("vpt_spp", vpt_spp).integer("shell_spp", shell_spp).num("g", g);
             j.num("memory_ms_table_mb", double(table_bytes) / mb)
                 .num("memory_shells_equal_mb", double(sh_eq.bytes) / mb)
                 .num("memory_shells_large_mb", double(sh_lg.bytes) / mb)
