@@ -280,6 +280,8 @@ int main(int argc, char** argv) {
             const int rank = ex.opt<int>("shell-rank", 6, 8, "NMF terms of the shell tables (paper 4-6)");
             const int shell_paths = ex.opt<int>("shell-paths", 60000, 400000, "paths per shell table");
             const int nmf_iter = ex.opt<int>("nmf-iterations", 150, 400, "NMF multiplicative-update iterations");
+            const std::string cos_cells = ex.opt<std::string>(
+                "shell-cos-cells", "angle", "layout of the shells' cos theta_1 cells: angle (equal theta_1 widths) or cos");
             const double eps1 = ex.opt<double>("eps1", 1.0, 0.2, "Alg. 1 solid-angle threshold eps1 (sr); eps2 = eps1 / 5");
             const double large = ex.opt<double>("large-factor", 4.0, 6.0, "memory of the large shell table / MS table memory (paper: 'increasing the memory')");
             ex.checkpointable();
@@ -299,6 +301,8 @@ int main(int argc, char** argv) {
             if (rank < 1 || rank > 64) throw cli_error("--shell-rank = " + std::to_string(rank) + " must be in [1, 64]");
             if (shell_paths < 1000 || shell_paths > 100000000) throw cli_error("--shell-paths must be in [1e3, 1e8]");
             if (nmf_iter < 10 || nmf_iter > 10000) throw cli_error("--nmf-iterations must be in [10, 1e4]");
+            if (cos_cells != "angle" && cos_cells != "cos")
+                throw cli_error("--shell-cos-cells = '" + cos_cells + "' must be angle or cos");
             if (!(eps1 > 0 && eps1 <= 10)) throw cli_error("--eps1 = " + std::to_string(eps1) + " must be in (0, 10]");
             if (!(large >= 1 && large <= 100)) throw cli_error("--large-factor = " + std::to_string(large) + " must be in [1, 100]");
             const bool full = ex.full();
@@ -376,6 +380,7 @@ int main(int argc, char** argv) {
                     bo.n_u = bo.n_v = nuv;
                     bo.rank = rank;
                     bo.nmf_iterations = nmf_iter;
+                    bo.cos_cells = cos_cells == "cos" ? gl::ShellCosCells::uniform_cos : gl::ShellCosCells::uniform_angle;
                     bo.seed = seed;
                     gl::ShellBuildResult res = gl::build_shell_table(smp, bo);
                     s.nmf_err = std::max(s.nmf_err, res.nmf_relative_error);
@@ -433,9 +438,9 @@ int main(int argc, char** argv) {
                         sc.shape.triangle_count(), R_opt, g, W, W);
             std::printf("  MS table %dx%d (rho, z) x %dx%d (theta, phi), %d photons: %.3f MB (%.2f s%s)\n", n_rho, n_z, n_theta, n_phi,
                         photons, double(table_bytes) / mb, cpu_table, cached ? ", cached" : "");
-            std::printf("  shells: %d radii 1..%.1f mfp, n_c %d, rank %d, %d paths per channel; equal memory n_u = n_v = %d: %.3f MB "
+            std::printf("  shells: %d radii 1..%.1f mfp, n_c %d (equal %s cells), rank %d, %d paths per channel; equal memory n_u = n_v = %d: %.3f MB "
                         "(%.2f s, NMF error %.3f); large n_u = n_v = %d: %.3f MB = %.1fx (%.2f s, NMF error %.3f)\n",
-                        shells, shell_rmax, n_c, rank, shell_paths, nuv_eq, double(sh_eq.bytes) / mb, sh_eq.cpu, sh_eq.nmf_err, nuv_lg,
+                        shells, shell_rmax, n_c, cos_cells == "cos" ? "cos theta_1" : "theta_1", rank, shell_paths, nuv_eq, double(sh_eq.bytes) / mb, sh_eq.cpu, sh_eq.nmf_err, nuv_lg,
                         double(sh_lg.bytes) / mb, double(sh_lg.bytes) / double(table_bytes), sh_lg.cpu, sh_lg.nmf_err);
             std::printf("  %-14s %9s %10s %18s %10s %10s %9s\n", "method", "memory MB", "mean", "rel.diff (s.e.)", "e^2", "e^2 hp",
                         "hp ratio");
@@ -474,6 +479,7 @@ int main(int argc, char** argv) {
                 .num("memory_shells_large_mb", double(sh_lg.bytes) / mb)
                 .integer("shells_equal_nuv", nuv_eq)
                 .integer("shells_large_nuv", nuv_lg)
+                .str("shell_cos_cells", cos_cells)
                 .num("vpt_multiple", c.ref[2])
                 .num("vpt_multiple_se", c.ref_se[2]);
             const char* keys[3] = {"table", "shells_equal", "shells_large"};
