@@ -522,10 +522,12 @@ struct ShellSceneOptions {
     bool hand_back = false;           ///< explicit tracing within r_0 of the faces
     std::string cos_cells = "angle";  ///< cos theta_1 cells of the shell table: angle (equal theta_1) or cos
 
-    static ShellSceneOptions declare(gl_examples::Example& ex, const std::string& volume) {
+    /// `spp_low_default`, `spp_high_default`: the example's defaults of --spp-low / --spp-high.
+    static ShellSceneOptions declare(gl_examples::Example& ex, const std::string& volume, int spp_low_default = 16,
+                                     int spp_high_default = 8) {
         ShellSceneOptions o;
-        o.spp_low = ex.opt<int>("spp-low", 16, "low-order samples per pixel per batch");
-        o.spp_high = ex.opt<int>("spp-high", 8, "high-order (shell) samples per pixel per batch");
+        o.spp_low = ex.opt<int>("spp-low", spp_low_default, "low-order samples per pixel per batch");
+        o.spp_high = ex.opt<int>("spp-high", spp_high_default, "high-order (shell) samples per pixel per batch");
         o.min_scatter = ex.opt<int>("min-scatter", 3, "switch rule: explicit interface events before shells");
         o.switch_depth = ex.opt<double>(
             "switch-depth", 2.0, "switch rule: depth below the " + volume + " surface to switch (R; default r_0 = 2)");
