@@ -19,6 +19,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "common/checkpoint.hpp"
 #include "common/harness.hpp"
 #include "grainlight/integrators/ept.hpp"
 #include "grainlight/media/continuous.hpp"
@@ -42,6 +43,7 @@ int main(int argc, char** argv) {
             "grain-radius", 0.004, "bounding-sphere radius of the grains (scene units; the sphere has radius 0.5)");
         const std::uint64_t spp = app.opt<std::uint64_t>("spp", 8, 64, "samples per pixel");
         const double exposure = app.opt<double>("exposure", 1.0, "PNG exposure in stops");
+        app.checkpointable();  // --checkpoint SECONDS / --resume
         app.ready();
         const bool full = app.full();
         const auto& out = app.out();
@@ -104,10 +106,18 @@ int main(int argc, char** argv) {
             opt.max_events = full ? 4096 : 512;
             auto bar = app.progress("fig5", std::uint64_t(height));
             const auto t0 = std::chrono::steady_clock::now();
-            const gl::EptImages img = gl::render_ept(scene, agg, camera, int(spp), seed, threads, opt,
-                                                     [&](int n) { bar.advance(std::uint64_t(n)); });
+            // This rank's rows (y % ranks == rank) and checkpoint; rank 0 assembles the rows.
+            gl::EptImages img = gl::render_ept(scene, agg, camera, render_options(app, int(spp), "render"), opt,
+                                               [&](int n) { bar.advance(std::uint64_t(n)); });
             bar.done();
             const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            const double local_rays = double(img.grain_rays);  // rays per second: rank 0's
+            img.low = app.mpi().gather_film_rows(img.low);
+            img.high = app.mpi().gather_film_rows(img.high);
+            if (!app.root()) {
+                app.finish({});
+                return;
+            }
             const gl::Image all = img.combined();
             gl::write_exr(out / "meng15_fig5_shape_of_grains.exr", all);
             gl::write_exr(out / "meng15_fig5_low_order.exr", img.low.image());
@@ -115,7 +125,7 @@ int main(int argc, char** argv) {
             gl::write_png(out / "meng15_fig5_shape_of_grains.png", all, {exposure});
             gl::write_png(out / "meng15_fig5_low_order.png", img.low.image(), {exposure});
             gl::write_png(out / "meng15_fig5_high_order.png", img.high.image(), {exposure});
-            const double rays_per_s = double(img.grain_rays) / seconds;
+            const double rays_per_s = local_rays / seconds;
             std::printf("Meng15 Fig. 5: %s of %s grains\n", shape_name.c_str(), grain.c_str());
             std::printf("  grains: %llu (bounding radius %.4g, tile of %zu spheres, f = %.3f, %zu voxels of which %zu inside, "
                         "%zu partial)\n",
@@ -135,7 +145,10 @@ int main(int argc, char** argv) {
                 .num("explicit_memory_mb", explicit_mb)
                 .num("rays_per_second", rays_per_s)
                 .num("seconds", seconds)
-                .integer("spp", (long long)spp);
+                .integer("spp", (long long)spp)
+                .str("rank_rows", "rank r renders the rows y with y % ranks == r (timings: rank 0's)")
+                .nums("rank_row_counts", app.mpi().row_counts(height));
+            Example::nonfinite(j, img.low.nonfinite_samples() + img.high.nonfinite_samples());
             app.finish(j);
         };
         if (shape_name == "blob") {
