@@ -10,22 +10,18 @@
 //
 //   meng15_fig11_snow_sphere [--quality quick|full] [--out DIR] [--seed S] [--threads N]
 //                            [--radius R] [--width W] [--spp N] [--absorption A]
+//                            [--checkpoint SECONDS] [--resume]
+//
+// --checkpoint / --resume: one checkpoint per technique's render in --out. mpirun -np K: rank r
+// renders the rows y % K == r of every render (meng15_scenes.hpp render_hybrid_run); the EXRs
+// are byte-identical to a single process's, the JSON says "ranks": K and each rank's rows.
 #include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
 
 #include "common/harness.hpp"
-#include "grainlight/geometry/grains.hpp"
-#include "grainlight/integrators/hybrid.hpp"
-#include "grainlight/media/continuous.hpp"
-#include "grainlight/media/teleportation.hpp"
-#include "grainlight/packing/md_packer.hpp"
-#include "grainlight/phase/tabulated.hpp"
-#include "grainlight/precompute/scatterometer.hpp"
-#include "grainlight/scene/camera.hpp"
-#include "grainlight/scene/image_io.hpp"
-#include "grainlight/scene/scene.hpp"
+#include "meng15_scenes.hpp"
 
 namespace gl = grainlight;
 using namespace gl_examples;
@@ -38,7 +34,9 @@ int main(int argc, char** argv) {
         const int spp = ex.opt<int>("spp", 8, 16, "bundles of 16 paths per pixel (>= 8)");
         const double absorption = ex.opt<double>("absorption", 1e-3, 3e-4, "grain interior absorption per grain radius (green)");
         const double exposure = ex.opt<double>("exposure", 0.0, "PNG exposure in stops");
+        ex.checkpointable();  // --checkpoint SECONDS / --resume: one checkpoint per technique's render
         ex.ready();
+        meng15::quiet_other_ranks(ex);
         if (!(Rb >= 4 && Rb <= 2000)) throw cli_error("--radius must be in [4, 2000] grain radii");
         if (width < 8 || width > 2048) throw cli_error("--width must be in [8, 2048]");
         if (spp < 8 || spp > 4096) throw cli_error("--spp must be in [8, 4096]");
@@ -48,37 +46,20 @@ int main(int argc, char** argv) {
 
         // Snow grains (the snow preset's shape, ior 1.31) with a faint ice-like absorption (red x2,
         // blue x0.5) in an MD packing at f = 0.6; the effective medium from their scatterometer
-        // statistics (Eq. 4) and the diffusion of App. A.
-        const auto packed = gl::md_pack(ex.full() ? 400 : 200, 0.6, ex.seed());
-        const double sc = 1.0 / packed.tile.radius();
-        std::vector<gl::Vec3d> centers = packed.tile.centers();
-        for (auto& c : centers) c *= sc;
-        const gl::PeriodicTile tile(packed.tile.side() * sc, 1.0, std::move(centers));
-        gl::GrainPreset p = gl::grain_preset("snow");
-        p.material = gl::GrainMaterial::make_absorbing_dielectric(1.31, gl::RGBd{2.0 * absorption, absorption, 0.5 * absorption});
-        gl::ScatterometerConfig cfg;
-        cfg.rays = ex.full() ? 400000 : 100000;
-        cfg.seed = ex.seed();
-        const gl::GrainStats stats =
-            gl::run_scatterometer(gl::ScatterometerGrain::procedural(p.shape, p.radius, p.material, p.seed, level), cfg);
-        const gl::EffectiveRteParams rte = gl::effective_rte_params(stats, tile.packing_fraction(), 1.0);
-        const gl::HybridDiffusion diffusion = gl::make_hybrid_diffusion(rte);
-        using Medium = gl::ContinuousMedium<gl::TabulatedPhase<float, gl::RGB>, gl::RGB>;
-        using SceneT = gl::Scene<Medium>;
+        // statistics (Eq. 4) and the diffusion of App. A; the ground, light and sky of
+        // meng15_scenes.hpp (the same set-up as fig13 and table2).
+        const meng15::Grains g = meng15::make_snow_grains(ex.seed(), ex.full(), absorption, level);
+        const gl::PeriodicTile& tile = g.tile;
+        const gl::GrainStats& stats = g.stats;
+        const gl::EffectiveRteParams& rte = g.rte;
+        const gl::HybridDiffusion& diffusion = g.diffusion;
+        using SceneT = meng15::SceneT;
         const gl::SphereBoundary shape(gl::Vec3d(0.0, Rb, 0.0), Rb);
-        const gl::GranularAggregate<gl::SphereBoundary> agg(
-            tile, gl::VoxelizedBoundary<gl::SphereBoundary>(shape, tile.side()),
-            {gl::GrainExemplar::procedural(p.shape, p.radius, p.material, p.seed, level)}, {1.0}, ex.seed());
+        const gl::GranularAggregate<gl::SphereBoundary> agg = g.aggregate(shape, ex.seed());
         const float R = float(Rb);
-        SceneT ept;
-        ept.add_shape(gl::QuadShape<float>(gl::Vec3f(-8 * R, -1.0f, -8 * R), gl::Vec3f(0, 0, 16 * R), gl::Vec3f(16 * R, 0, 0)),
-                      gl::Material<float, gl::RGB>::diffuse(gl::RGB{0.45f, 0.45f, 0.45f}));
-        ept.add_quad_light(gl::QuadShape<float>(gl::Vec3f(1.2f * R, 4.0f * R, 1.2f * R), gl::Vec3f(0.8f * R, 0, 0),
-                                                gl::Vec3f(0, 0, 0.8f * R)),
-                           gl::RGB{60.0f, 57.0f, 52.0f});
-        ept.add_light(SceneT::LightT::environment_light(gl::RGB{0.04f, 0.05f, 0.08f}));
+        const SceneT ept = meng15::make_lit_scene(R);
         SceneT vpt = ept;
-        const int m = vpt.add_medium(gl::make_effective_medium<float, gl::RGB>(stats, tile.packing_fraction(), 1.0));
+        const int m = vpt.add_medium(g.medium);
         const int b = vpt.add_shape(gl::SphereShape<float>(gl::Vec3f(0.0f, R, 0.0f), R), gl::Material<float, gl::RGB>::index_matched(),
                                     m, -1);
         const gl::HybridContext<gl::BoundaryDistance<gl::SphereBoundary>> ctx{m, b, {shape}, &diffusion};
@@ -96,10 +77,10 @@ int main(int argc, char** argv) {
             opt.mode = mode;
             opt.ept.max_events = 4096;
             opt.vpt.max_depth = 4096;
-            ProgressBar bar(gl::hybrid_mode_name(mode), std::uint64_t(height));
-            imgs.push_back(gl::render_hybrid(ept, vpt, agg, ctx, cam, spp, ex.seed(), ex.threads(), opt, 1,
-                                             [&](int n) { bar.advance(std::uint64_t(n)); }));
-            bar.done();
+            // One checkpoint per technique; this rank's rows, the films shared by all ranks.
+            std::string stem = gl::hybrid_mode_name(mode);
+            for (char& ch : stem) ch = ch == '+' ? '_' : char(std::tolower(ch));
+            imgs.push_back(meng15::render_hybrid_run(ex, stem, ept, vpt, agg, ctx, cam, spp, ex.seed(), opt, gl::hybrid_mode_name(mode)));
         }
         const gl::HybridImages& ref = imgs[4];
         const gl::Image ref_img = ref.combined();
@@ -143,17 +124,17 @@ int main(int argc, char** argv) {
                     for (int c = 0; c < 3; ++c) strip.at(t * width + x, y, c) = all.at(x, y, c);
             std::string file = name;
             for (char& ch : file) ch = ch == '+' ? '_' : char(std::tolower(ch));
-            gl::write_exr(ex.out() / ("fig11_" + file + ".exr"), all);
-            gl::write_png(ex.out() / ("fig11_" + file + ".png"), all, {exposure});
+            if (ex.root()) gl::write_exr(ex.out() / ("fig11_" + file + ".exr"), all);
+            if (ex.root()) gl::write_png(ex.out() / ("fig11_" + file + ".png"), all, {exposure});
             if (modes[t] == gl::HybridMode::ept_vpt_da) {
                 // Fig. 12 (middle / bottom right): what each technique gathered, and the switch depth.
-                gl::write_exr(ex.out() / "fig11_ept_vpt_da_contrib_ept.exr", h.ept_image());
-                gl::write_exr(ex.out() / "fig11_ept_vpt_da_contrib_vpt.exr", h.vpt_image());
-                gl::write_exr(ex.out() / "fig11_ept_vpt_da_contrib_da.exr", h.da_image());
-                gl::write_png(ex.out() / "fig11_ept_vpt_da_contrib_ept.png", h.ept_image(), {exposure});
-                gl::write_png(ex.out() / "fig11_ept_vpt_da_contrib_vpt.png", h.vpt_image(), {exposure});
-                gl::write_png(ex.out() / "fig11_ept_vpt_da_contrib_da.png", h.da_image(), {exposure});
-                gl::write_exr(ex.out() / "fig11_switch_depth.exr", h.switch_depth);
+                if (ex.root()) gl::write_exr(ex.out() / "fig11_ept_vpt_da_contrib_ept.exr", h.ept_image());
+                if (ex.root()) gl::write_exr(ex.out() / "fig11_ept_vpt_da_contrib_vpt.exr", h.vpt_image());
+                if (ex.root()) gl::write_exr(ex.out() / "fig11_ept_vpt_da_contrib_da.exr", h.da_image());
+                if (ex.root()) gl::write_png(ex.out() / "fig11_ept_vpt_da_contrib_ept.png", h.ept_image(), {exposure});
+                if (ex.root()) gl::write_png(ex.out() / "fig11_ept_vpt_da_contrib_vpt.png", h.vpt_image(), {exposure});
+                if (ex.root()) gl::write_png(ex.out() / "fig11_ept_vpt_da_contrib_da.png", h.da_image(), {exposure});
+                if (ex.root()) gl::write_exr(ex.out() / "fig11_switch_depth.exr", h.switch_depth);
                 std::printf("  %11s contributions of EPT / VPT / DA to the mean: %.4f / %.4f / %.4f; switch depth %.2f grain "
                             "interactions\n",
                             "", mean3(h.ept_image()), mean3(h.vpt_image()), mean3(h.da_image()), depth);
@@ -166,12 +147,13 @@ int main(int argc, char** argv) {
         }
         std::printf("  (Meng15 Fig. 11 shows images only: VPT and VPT+DA alone miss the grain-scale detail that a few EPT "
                     "bounces before the switch recover; EPT is the reference)\n");
-        gl::write_exr(ex.out() / "fig11_strip.exr", strip);
-        gl::write_png(ex.out() / "fig11_strip.png", strip, {exposure});
-        ex.csv("meng15_fig11_snow_sphere.csv", csv);
+        if (ex.root()) gl::write_exr(ex.out() / "fig11_strip.exr", strip);
+        if (ex.root()) gl::write_png(ex.out() / "fig11_strip.png", strip, {exposure});
+        if (ex.root()) ex.csv("meng15_fig11_snow_sphere.csv", csv);
         std::printf("wrote %s/fig11_strip.{exr,png} (VPT | VPT+DA | EPT+VPT | EPT+VPT+DA | EPT), fig11_*.{exr,png}, "
                     "meng15_fig11_snow_sphere.csv\n",
                     ex.out().c_str());
+        meng15::rank_rows(j, ex, height);
         return ex.finish(j.num("d_DA", diffusion.d_DA).num("radius", Rb).integer("spp", spp));
     });
 }

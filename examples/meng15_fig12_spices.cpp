@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "common/checkpoint.hpp"
 #include "common/harness.hpp"
 #include "meng15_scenes.hpp"
 
@@ -53,7 +54,12 @@ int main(int argc, char** argv) {
         const int spp = ex.opt<int>("spp", 8, 8, "bundles of 16 paths per pixel (>= 8: the variance batches)");
         const double absorption = ex.opt<double>("absorption", 1e-3, 3e-4, "cane sugar interior absorption per grain radius");
         const double exposure = ex.opt<double>("exposure", 0.0, "PNG exposure in stops");
+        const int spp_eq_pin = ex.opt<int>("equal-time-spp", 0,
+                                           "bundles per pixel of the equal-time EPT inset (0: from the measured CPU times)");
+        ex.checkpointable();  // --checkpoint SECONDS / --resume: one checkpoint per render
         ex.ready();
+        meng15::quiet_other_ranks(ex);
+        if (spp_eq_pin < 0 || spp_eq_pin > 65536) throw cli_error("--equal-time-spp = " + ex.given_text("equal-time-spp") + " must be in [0, 65536]");
         if (width < 32 || width > 4096) throw cli_error("--width must be in [32, 4096]");
         if (!(Rh >= 5 && Rh <= 5000)) throw cli_error("--radius must be in [5, 5000] grain radii");
         if (spp < 8 || spp > 4096) throw cli_error("--spp must be in [8, 4096] (measuring.md: >= 8 batches)");
@@ -76,16 +82,20 @@ int main(int argc, char** argv) {
         opt.ept.max_events = 4096;
         opt.vpt.max_depth = 4096;
         opt.mode = gl::HybridMode::ept;
-        const Composite ept = meng15::render_panels(panels, spp, ex.seed(), ex.threads(), opt, "EPT");
+        const Composite ept = meng15::render_panels(ex, panels, spp, ex.seed(), opt, "EPT");
         opt.mode = gl::HybridMode::ept_vpt;
-        const Composite ev = meng15::render_panels(panels, spp, ex.seed(), ex.threads(), opt, "EPT+VPT");
+        const Composite ev = meng15::render_panels(ex, panels, spp, ex.seed(), opt, "EPT+VPT");
         opt.mode = gl::HybridMode::ept_vpt_da;
-        const Composite eva = meng15::render_panels(panels, spp, ex.seed(), ex.threads(), opt, "EPT+VPT+DA");
+        const Composite eva = meng15::render_panels(ex, panels, spp, ex.seed(), opt, "EPT+VPT+DA");
         // Equal-time EPT inset: as many EPT bundles per pixel as EPT+VPT+DA's CPU time buys
         // (measured costs per bundle of the two renders above).
-        const int spp_eq = std::max(1, int(std::lround(double(spp) * eva.seconds_per_spp / ept.seconds_per_spp)));
+        // Rank 0's choice (the same on every rank), kept for --resume (checkpoint.hpp decided); pinned
+        // by --equal-time-spp for reproducible images (the CPU times differ between runs).
+        const int spp_eq = spp_eq_pin > 0 ? spp_eq_pin : int(decided(ex, "equal_time_spp", [&] {
+            return std::vector<double>{std::max(1.0, double(std::lround(double(spp) * eva.seconds_per_spp / ept.seconds_per_spp)))};
+        })[0]);
         opt.mode = gl::HybridMode::ept;
-        const Composite ept_eq = meng15::render_panels(panels, spp_eq, ex.seed() + 101, ex.threads(), opt, "EPT equal time");
+        const Composite ept_eq = meng15::render_panels(ex, panels, spp_eq, ex.seed() + 101, opt, "EPT equal time");
 
         const auto speed = [&](const Composite& c) { return ept.ttuv() / c.ttuv(); };
         const auto speed_se = [&](const Composite& c) { return speed(c) * std::hypot(ept.ttuv_se() / ept.ttuv(), c.ttuv_se() / c.ttuv()); };
@@ -144,8 +154,8 @@ int main(int argc, char** argv) {
 
         // Images.
         const auto write = [&](const std::string& name, const gl::Image& im) {
-            gl::write_exr(ex.out() / (name + ".exr"), im);
-            gl::write_png(ex.out() / (name + ".png"), im, {exposure});
+            if (ex.root()) gl::write_exr(ex.out() / (name + ".exr"), im);
+            if (ex.root()) gl::write_png(ex.out() / (name + ".png"), im, {exposure});
         };
         write("fig12_spices", all);
         write("fig12_spices_ept", ept.image(Composite::Part::combined));
@@ -157,8 +167,8 @@ int main(int argc, char** argv) {
         const gl::Image depth = eva.image(Composite::Part::switch_depth);
         double dmax = 0;
         for (float v : depth.rgb) dmax = std::max(dmax, double(v));
-        gl::write_exr(ex.out() / "fig12_switch_depth.exr", depth);
-        gl::write_png(ex.out() / "fig12_switch_depth.png", scaled(depth, dmax > 0 ? 1.0 / dmax : 1.0), {0.0});
+        if (ex.root()) gl::write_exr(ex.out() / "fig12_switch_depth.exr", depth);
+        if (ex.root()) gl::write_png(ex.out() / "fig12_switch_depth.png", scaled(depth, dmax > 0 ? 1.0 / dmax : 1.0), {0.0});
         {
             const gl::Image rows[6] = {all,
                                        ept_eq.image(Composite::Part::combined),
@@ -172,9 +182,9 @@ int main(int argc, char** argv) {
                 for (int y = 0; y < H; ++y)
                     for (int x = 0; x < W; ++x)
                         for (int c = 0; c < 3; ++c) fig.at(x, r * H + y, c) = rows[r].at(x, y, c);
-            gl::write_png(ex.out() / "fig12_figure.png", fig, {exposure});
+            if (ex.root()) gl::write_png(ex.out() / "fig12_figure.png", fig, {exposure});
         }
-        ex.csv("meng15_fig12_spices.csv", csv);
+        if (ex.root()) ex.csv("meng15_fig12_spices.csv", csv);
         std::printf("wrote %s/fig12_spices.{exr,png}, fig12_contrib_{ept,vpt,da}, fig12_switch_depth, fig12_equal_time_ept, "
                     "fig12_figure.png (rows: EPT+VPT+DA | equal-time EPT | EPT | VPT | DA | switch depth), meng15_fig12_spices.csv\n",
                     ex.out().c_str());
@@ -201,6 +211,7 @@ int main(int argc, char** argv) {
             .num("paper_high_order_hours_ratio", 4148.0 / 34.0)
             .num("radius", Rh)
             .integer("spp", spp);
+        meng15::rank_rows(j, ex, ph);
         return ex.finish(j);
     });
 }

@@ -19,6 +19,14 @@
 //
 //   meng15_fig13_snowman [--quality quick|full] [--out DIR] [--seed S] [--threads N] [--width W]
 //                        [--size H] [--budget B] [--absorption A] [--preview-stride K] [--exposure E]
+//                        [--fixed-spp N] [--checkpoint SECONDS] [--resume]
+//
+// --checkpoint / --resume: one checkpoint per scale and technique in --out, and the cost
+// preview's numbers beside them (a resumed run uses the killed run's sample counts). mpirun -np K:
+// rank r renders the rows y % K == r (meng15_scenes.hpp render_hybrid_run), rank 0 runs the cost
+// previews and sends their numbers to all. Equal time rests on measured CPU times, so two runs
+// differ in their sample counts: --fixed-spp N renders every technique with N bundles per pixel
+// (no preview) when images must be reproducible (kill + resume, 1 vs K ranks).
 //
 // Writes per scale and technique EXR + PNG, a combined PNG (rows: 1 m, 10 cm; columns: EPT |
 // EPT+VPT | EPT+VPT+DA), a CSV and its plot; last stdout line:
@@ -30,26 +38,16 @@
 #include <string>
 #include <vector>
 
+#include "common/checkpoint.hpp"
 #include "common/harness.hpp"
-#include "grainlight/geometry/grains.hpp"
-#include "grainlight/geometry/procedural_boundaries.hpp"
-#include "grainlight/integrators/hybrid.hpp"
-#include "grainlight/media/continuous.hpp"
-#include "grainlight/media/teleportation.hpp"
-#include "grainlight/packing/md_packer.hpp"
-#include "grainlight/phase/tabulated.hpp"
-#include "grainlight/precompute/scatterometer.hpp"
-#include "grainlight/scene/camera.hpp"
-#include "grainlight/scene/image_io.hpp"
-#include "grainlight/scene/scene.hpp"
+#include "meng15_scenes.hpp"
 
 namespace gl = grainlight;
 using namespace gl_examples;
 
 namespace {
 
-using Medium = gl::ContinuousMedium<gl::TabulatedPhase<float, gl::RGB>, gl::RGB>;
-using SceneT = gl::Scene<Medium>;
+using meng15::SceneT;
 
 // Meng15 Table 2, rows SNOWMAN LG. (1 m) and SM. (10 cm), P_a = 1: ttuv in seconds of EPT,
 // EPT+VPT, EPT+VPT+DA, and the printed speed-ups over EPT.
@@ -74,7 +72,14 @@ int main(int argc, char** argv) {
         const int stride = ex.opt<int>("preview-stride", 4, 8, "cost preview: every k-th pixel in x and y");
         const int level = ex.opt<int>("grain-level", 3, 4, "icosphere level of the snow grain mesh");
         const double exposure = ex.opt<double>("exposure", 0.0, "PNG exposure in stops");
+        const int fixed_spp = ex.opt<int>("fixed-spp", 0,
+                                          "bundles per pixel of every technique instead of equal CPU time (0: equal time; "
+                                          ">= 2: no cost preview, reproducible images)");
+        ex.checkpointable();  // --checkpoint SECONDS / --resume: one checkpoint per scale and technique
         ex.ready();
+        meng15::quiet_other_ranks(ex);
+        if (fixed_spp != 0 && (fixed_spp < 2 || fixed_spp > 65536))
+            throw cli_error("--fixed-spp = " + ex.given_text("fixed-spp") + " must be 0 or in [2, 65536]");
         if (width < 8 || width > 4096) throw cli_error("--width must be in [8, 4096]");
         if (!(size >= 20 && size <= 5000)) throw cli_error("--size must be in [20, 5000] grain radii");
         if (!(budget_arg > 0 && budget_arg <= 1e6)) throw cli_error("--budget must be in (0, 1e6] CPU seconds");
@@ -85,22 +90,13 @@ int main(int argc, char** argv) {
         const double npx = double(width) * double(height);
 
         // Snow grains (snow preset shape, ior 1.31, absorption red x2 / blue x0.5) in an MD packing at
-        // f = 0.6; effective medium (Eq. 4) and App. A's diffusion from the scatterometer statistics.
-        const auto packed = gl::md_pack(ex.full() ? 400 : 200, 0.6, ex.seed());
-        const double s = 1.0 / packed.tile.radius();
-        std::vector<gl::Vec3d> centers = packed.tile.centers();
-        for (auto& c : centers) c *= s;
-        const gl::PeriodicTile tile(packed.tile.side() * s, 1.0, std::move(centers));
-        gl::GrainPreset p = gl::grain_preset("snow");
-        p.material = gl::GrainMaterial::make_absorbing_dielectric(1.31, gl::RGBd{2.0 * absorption, absorption, 0.5 * absorption});
-        gl::ScatterometerConfig cfg;
-        cfg.rays = ex.full() ? 400000 : 100000;
-        cfg.seed = ex.seed();
-        const gl::GrainStats stats =
-            gl::run_scatterometer(gl::ScatterometerGrain::procedural(p.shape, p.radius, p.material, p.seed, level), cfg);
-        const gl::EffectiveRteParams rte = gl::effective_rte_params(stats, tile.packing_fraction(), 1.0);
-        const gl::HybridDiffusion diffusion = gl::make_hybrid_diffusion(rte);
-        const Medium medium = gl::make_effective_medium<float, gl::RGB>(stats, tile.packing_fraction(), 1.0);
+        // f = 0.6; effective medium (Eq. 4) and App. A's diffusion from the scatterometer statistics
+        // (meng15_scenes.hpp: the same set-up as fig11 and table2).
+        const meng15::Grains g = meng15::make_snow_grains(ex.seed(), ex.full(), absorption, level);
+        const gl::PeriodicTile& tile = g.tile;
+        const gl::GrainStats& stats = g.stats;
+        const gl::EffectiveRteParams& rte = g.rte;
+        const gl::HybridDiffusion& diffusion = g.diffusion;
         std::printf("Meng15 Fig. 13 stand-in: snow grains (ior 1.31, absorption %.2g /R green), f = %.3f, albedo %.4f, "
                     "sigma_t %.3f /R, d_DA = %.2f R; %dx%d px, equal CPU time %.1f s per technique (requested)\n",
                     absorption, tile.packing_fraction(), stats.alpha_s(1), rte.sigma_t[1], diffusion.d_DA, width, height,
@@ -124,20 +120,12 @@ int main(int argc, char** argv) {
             const double Hs = si == 0 ? size : size / 10.0;
             const gl::TriangleMesh<double> mesh = gl::make_snowman_mesh(Hs, ex.full() ? 192 : 96, ex.full() ? 128 : 64);
             const gl::MeshBoundary shape(mesh);
-            const gl::GranularAggregate<gl::MeshBoundary> agg(
-                tile, gl::VoxelizedBoundary<gl::MeshBoundary>(shape, tile.side()),
-                {gl::GrainExemplar::procedural(p.shape, p.radius, p.material, p.seed, level)}, {1.0}, ex.seed());
+            const gl::GranularAggregate<gl::MeshBoundary> agg = g.aggregate(shape, ex.seed());
             // Ground one grain radius below the flat bottom, a small warm quad light, a dim blue sky.
             const float R = float(0.4 * Hs);
-            SceneT ept;
-            ept.add_shape(gl::QuadShape<float>(gl::Vec3f(-8 * R, -1.0f, -8 * R), gl::Vec3f(0, 0, 16 * R), gl::Vec3f(16 * R, 0, 0)),
-                          gl::Material<float, gl::RGB>::diffuse(gl::RGB{0.45f, 0.45f, 0.45f}));
-            ept.add_quad_light(gl::QuadShape<float>(gl::Vec3f(1.2f * R, 4.0f * R, 1.2f * R), gl::Vec3f(0.8f * R, 0, 0),
-                                                    gl::Vec3f(0, 0, 0.8f * R)),
-                               gl::RGB{60.0f, 57.0f, 52.0f});
-            ept.add_light(SceneT::LightT::environment_light(gl::RGB{0.04f, 0.05f, 0.08f}));
+            const SceneT ept = meng15::make_lit_scene(R);
             SceneT vpt = ept;
-            const int m = vpt.add_medium(medium);
+            const int m = vpt.add_medium(g.medium);
             const gl::HybridContext<gl::MeshDistance> ctx = gl::add_mesh_boundary(vpt, mesh, m, &diffusion);
             const float Hf = float(Hs);
             const gl::PinholeCamera<float> cam(gl::Vec3f(0.0f, 0.55f * Hf, 1.45f * Hf), gl::Vec3f(0.0f, 0.46f * Hf, 0.0f),
@@ -145,20 +133,30 @@ int main(int argc, char** argv) {
             std::printf("\nscale %s: snowman %.0f grain radii tall (%s), mesh boundary of %zu triangles\n", key.c_str(), Hs,
                         si == 0 ? "Fig. 13 top" : "Fig. 13 bottom: grain radius x10", mesh.triangle_count());
 
-            // 1. Cost preview per technique: CPU seconds of one bundle per pixel.
+            // 1. Cost preview per technique: CPU seconds of one bundle per pixel (rank 0 measures, every
+            // rank gets its numbers; kept for --resume: checkpoint.hpp decided). --fixed-spp skips it.
             Row rows[3];
             gl::HybridOptions opts[3];
             for (int t = 0; t < 3; ++t) {
                 opts[t].mode = techs[t].mode;
                 opts[t].ept.max_events = 4096;
                 opts[t].vpt.max_depth = 4096;
-                const gl::HybridImages pv =
-                    gl::render_hybrid(ept, vpt, agg, ctx, cam, 2, ex.seed() + 7, ex.threads(), opts[t], stride);
-                const double n_pv = double(pv.low.width()) * double(pv.low.height());
-                rows[t].cost = (pv.cpu_seconds_low + pv.cpu_seconds_high) / (2.0 * n_pv);
             }
-            const double budget = std::max(budget_arg, 2.0 * rows[0].cost * npx);
-            if (budget > budget_arg)
+            if (fixed_spp == 0) {
+                const std::vector<double> cost = decided(ex, key + ".cost", [&] {
+                    std::vector<double> c;
+                    for (int t = 0; t < 3; ++t) {
+                        const gl::HybridImages pv =
+                            gl::render_hybrid(ept, vpt, agg, ctx, cam, 2, ex.seed() + 7, ex.threads(), opts[t], stride);
+                        const double n_pv = double(pv.low.width()) * double(pv.low.height());
+                        c.push_back((pv.cpu_seconds_low + pv.cpu_seconds_high) / (2.0 * n_pv));
+                    }
+                    return c;
+                });
+                for (int t = 0; t < 3; ++t) rows[t].cost = cost[std::size_t(t)];
+            }
+            const double budget = fixed_spp > 0 ? 0.0 : std::max(budget_arg, 2.0 * rows[0].cost * npx);
+            if (fixed_spp == 0 && budget > budget_arg)
                 std::printf("  EPT needs %.1f CPU s for 2 bundles per pixel: budget raised from %.1f to %.1f s\n",
                             2.0 * rows[0].cost * npx, budget_arg, budget);
             // 2. Equal-time renders.
@@ -167,11 +165,9 @@ int main(int argc, char** argv) {
             gl::Image imgs[3];
             for (int t = 0; t < 3; ++t) {
                 Row& r = rows[t];
-                r.spp = int(std::clamp(std::lround(budget / (r.cost * npx)), 2L, 65536L));
-                ProgressBar bar(key + " " + techs[t].name, std::uint64_t(height));
-                const gl::HybridImages img = gl::render_hybrid(ept, vpt, agg, ctx, cam, r.spp, ex.seed(), ex.threads(), opts[t], 1,
-                                                               [&](int n) { bar.advance(std::uint64_t(n)); });
-                bar.done();
+                r.spp = fixed_spp > 0 ? fixed_spp : int(std::clamp(std::lround(budget / (r.cost * npx)), 2L, 65536L));
+                const gl::HybridImages img = meng15::render_hybrid_run(ex, key + "_" + techs[t].key, ept, vpt, agg, ctx, cam, r.spp,
+                                                                       ex.seed(), opts[t], key + " " + techs[t].name);
                 imgs[t] = img.combined();
                 r.seconds = img.cpu_seconds_low + img.cpu_seconds_high;
                 r.mean = (imgs[t].mean(0) + imgs[t].mean(1) + imgs[t].mean(2)) / 3.0;
@@ -185,8 +181,8 @@ int main(int argc, char** argv) {
                 r.da_per_path = double(img.counters.da) / paths;
                 r.switched = (double(img.counters.switched) + double(img.counters.rejected)) / paths;
                 const std::string file = key + "_" + techs[t].key;
-                gl::write_exr(ex.out() / (file + ".exr"), imgs[t]);
-                gl::write_png(ex.out() / (file + ".png"), imgs[t], {exposure});
+                if (ex.root()) gl::write_exr(ex.out() / (file + ".exr"), imgs[t]);
+                if (ex.root()) gl::write_png(ex.out() / (file + ".png"), imgs[t], {exposure});
                 for (int y = 0; y < height; ++y)
                     for (int x = 0; x < width; ++x)
                         for (int c = 0; c < 3; ++c) strip.at(t * width + x, si * height + y, c) = imgs[t].at(x, y, c);
@@ -225,15 +221,18 @@ int main(int argc, char** argv) {
             if (!scales_json.empty()) scales_json += ',';
             scales_json += Json::quote(key) + ":" + j.str();
         }
-        gl::write_exr(ex.out() / "fig13_snowman_equal_time.exr", strip);
-        gl::write_png(ex.out() / "fig13_snowman_equal_time.png", strip, {exposure});
-        const auto csv_path = ex.csv("meng15_fig13_snowman.csv", csv);
-        ex.plot("meng15_fig13_snowman", csv_path, ex.out() / "meng15_fig13_snowman.png");
+        if (ex.root()) gl::write_exr(ex.out() / "fig13_snowman_equal_time.exr", strip);
+        if (ex.root()) gl::write_png(ex.out() / "fig13_snowman_equal_time.png", strip, {exposure});
+        if (ex.root()) {
+            const auto csv_path = ex.csv("meng15_fig13_snowman.csv", csv);
+            ex.plot("meng15_fig13_snowman", csv_path, ex.out() / "meng15_fig13_snowman.png");
+        }
         std::printf("wrote %s/snowman_{1m,10cm}_{ept,ept_vpt,ept_vpt_da}.{exr,png}, fig13_snowman_equal_time.{exr,png} "
                     "(rows 1 m, 10 cm; columns EPT | EPT+VPT | EPT+VPT+DA), meng15_fig13_snowman.{csv,png}\n",
                     ex.out().c_str());
-        const std::string meta = ex.summary().num("d_DA", diffusion.d_DA).integer("width", width).str();
-        std::cout << "{\"scales\":{" << scales_json << "}," << meta.substr(1) << std::endl;
-        return 0;
+        Json meta = ex.summary();
+        meta.num("d_DA", diffusion.d_DA).integer("width", width);
+        meng15::rank_rows(meta, ex, height);
+        return ex.finish_line("{\"scales\":{" + scales_json + "}," + meta.str().substr(1));
     });
 }

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "common/checkpoint.hpp"
 #include "common/harness.hpp"
 #include "meng15_scenes.hpp"
 
@@ -47,7 +48,12 @@ int main(int argc, char** argv) {
                                              "castle width in grain radii (5200: ~2e9 sand grains, Fig. 1's scale)");
         const int spp = ex.opt<int>("spp", 8, 8, "bundles of 16 paths per pixel (>= 8: the variance batches)");
         const double exposure = ex.opt<double>("exposure", 0.0, "PNG exposure in stops");
+        const int spp_eq_pin = ex.opt<int>("equal-time-spp", 0,
+                                           "bundles per pixel of the equal-time EPT inset (0: from the measured CPU times)");
+        ex.checkpointable();  // --checkpoint SECONDS / --resume: one checkpoint per render
         ex.ready();
+        meng15::quiet_other_ranks(ex);
+        if (spp_eq_pin < 0 || spp_eq_pin > 65536) throw cli_error("--equal-time-spp = " + ex.given_text("equal-time-spp") + " must be in [0, 65536]");
         if (width < 16 || width > 4096) throw cli_error("--width must be in [16, 4096]");
         if (!(castle >= 10 && castle <= 1e5)) throw cli_error("--castle-size must be in [10, 1e5] grain radii");
         if (spp < 8 || spp > 4096) throw cli_error("--spp must be in [8, 4096] (measuring.md: >= 8 batches)");
@@ -67,12 +73,16 @@ int main(int argc, char** argv) {
         opt.ept.max_events = 4096;
         opt.vpt.max_depth = 4096;
         opt.mode = gl::HybridMode::ept;
-        const Composite ept = meng15::render_panels(panels, spp, ex.seed(), ex.threads(), opt, "EPT");
+        const Composite ept = meng15::render_panels(ex, panels, spp, ex.seed(), opt, "EPT");
         opt.mode = gl::HybridMode::ept_vpt_da;
-        const Composite eva = meng15::render_panels(panels, spp, ex.seed(), ex.threads(), opt, "EPT+VPT+DA");
-        const int spp_eq = std::max(1, int(std::lround(double(spp) * eva.seconds_per_spp / ept.seconds_per_spp)));
+        const Composite eva = meng15::render_panels(ex, panels, spp, ex.seed(), opt, "EPT+VPT+DA");
+        // Rank 0's choice (the same on every rank), kept for --resume (checkpoint.hpp decided); pinned
+        // by --equal-time-spp for reproducible images (the CPU times differ between runs).
+        const int spp_eq = spp_eq_pin > 0 ? spp_eq_pin : int(decided(ex, "equal_time_spp", [&] {
+            return std::vector<double>{std::max(1.0, double(std::lround(double(spp) * eva.seconds_per_spp / ept.seconds_per_spp)))};
+        })[0]);
         opt.mode = gl::HybridMode::ept;
-        const Composite ept_eq = meng15::render_panels(panels, spp_eq, ex.seed() + 101, ex.threads(), opt, "EPT equal time");
+        const Composite ept_eq = meng15::render_panels(ex, panels, spp_eq, ex.seed() + 101, opt, "EPT equal time");
 
         const double speed = ept.ttuv() / eva.ttuv();
         const double speed_se = speed * std::hypot(ept.ttuv_se() / ept.ttuv(), eva.ttuv_se() / eva.ttuv());
@@ -101,14 +111,14 @@ int main(int argc, char** argv) {
             for (int x = 0; x < width; ++x)
                 for (int c = 0; c < 3; ++c) split.at(x, y, c) = bottom.at(x, y, c);
         const auto write = [&](const std::string& name, const gl::Image& im) {
-            gl::write_exr(ex.out() / (name + ".exr"), im);
-            gl::write_png(ex.out() / (name + ".png"), im, {exposure});
+            if (ex.root()) gl::write_exr(ex.out() / (name + ".exr"), im);
+            if (ex.root()) gl::write_png(ex.out() / (name + ".png"), im, {exposure});
         };
         write("fig1_sandcastle", split);
         write("fig1_sandcastle_ept", bottom);
         write("fig1_sandcastle_ept_vpt_da", top);
         write("fig1_equal_time_ept", ept_eq.image(Composite::Part::combined));
-        gl::write_exr(ex.out() / "fig1_switch_depth.exr", eva.image(Composite::Part::switch_depth));
+        if (ex.root()) gl::write_exr(ex.out() / "fig1_switch_depth.exr", eva.image(Composite::Part::switch_depth));
         Csv csv({"technique", "spp", "high_cpu_seconds", "total_cpu_seconds", "pixel_variance", "ttuv", "ttuv_high", "speedup",
                  "speedup_high", "mean", "bias", "bias_stderr", "paper_high_hours", "paper_ttuv"});
         csv.row_text({"EPT", std::to_string(spp), std::to_string(high_ept), std::to_string(ept.cpu()), std::to_string(var_ept),
@@ -121,7 +131,7 @@ int main(int argc, char** argv) {
         csv.row_text({"EPT equal time", std::to_string(spp_eq), std::to_string(ept_eq.high_seconds_per_spp * spp_eq),
                       std::to_string(ept_eq.cpu()), std::to_string(ept_eq.var_total / spp_eq), std::to_string(ept_eq.ttuv()),
                       std::to_string(ept_eq.ttuv_high()), "", "", std::to_string(ept_eq.mean), "", "", "", ""});
-        ex.csv("meng15_fig1_sandcastle.csv", csv);
+        if (ex.root()) ex.csv("meng15_fig1_sandcastle.csv", csv);
         std::printf("wrote %s/fig1_sandcastle.{exr,png} (top half EPT+VPT+DA, bottom half EPT), fig1_sandcastle_{ept,ept_vpt_da}, "
                     "fig1_equal_time_ept, fig1_switch_depth.exr, meng15_fig1_sandcastle.csv\n",
                     ex.out().c_str());
@@ -145,6 +155,7 @@ int main(int argc, char** argv) {
             .num("paper_high_order_hours_ratio", paper_high_hours[0] / paper_high_hours[1])
             .num("castle_size", castle)
             .integer("spp", spp);
+        meng15::rank_rows(j, ex, height);
         return ex.finish(j);
     });
 }

@@ -45,7 +45,9 @@ int main(int argc, char** argv) {
         const int width = ex.opt<int>("width", 96, 512, "image width (height = 3/4 width)");
         const int spp = ex.opt<int>("spp", 8, 8, "bundles of 16 paths per pixel (>= 8: the variance batches)");
         const double exposure = ex.opt<double>("exposure", 0.0, "PNG exposure in stops");
+        ex.checkpointable();  // --checkpoint SECONDS / --resume: one checkpoint per technique's render
         ex.ready();
+        meng15::quiet_other_ranks(ex);
         if (!(beads >= 100 && beads <= 1e9)) throw cli_error("--beads must be in [100, 1e9]");
         if (width < 8 || width > 4096) throw cli_error("--width must be in [8, 4096]");
         if (spp < 8 || spp > 4096) throw cli_error("--spp must be in [8, 4096] (measuring.md: >= 8 batches)");
@@ -67,7 +69,7 @@ int main(int argc, char** argv) {
         std::vector<Composite> r;
         for (gl::HybridMode mode : modes) {
             opt.mode = mode;
-            r.push_back(meng15::render_panels(panels, spp, ex.seed(), ex.threads(), opt, gl::hybrid_mode_name(mode)));
+            r.push_back(meng15::render_panels(ex, panels, spp, ex.seed(), opt, gl::hybrid_mode_name(mode)));
         }
         // Per-pixel squared bias against EPT (unbiased estimate, mean over pixels).
         const gl::Image ref = r[0].image(Composite::Part::combined);
@@ -112,23 +114,26 @@ int main(int argc, char** argv) {
             for (char& ch : key) ch = ch == '+' ? '_' : char(std::tolower(ch));
             j.num(key + "_ttuv", c.ttuv()).num(key + "_bias2", b2[k]).num(key + "_rel_bias", rel).num(key + "_rel_bias_stderr", rel_se);
             if (k > 0) j.num(key + "_speedup", r[0].ttuv() / c.ttuv()).num(key + "_equal_quality_speedup", speed_eq);
-            gl::write_exr(ex.out() / ("fig7_" + key + ".exr"), im);
-            gl::write_png(ex.out() / ("fig7_" + key + ".png"), im, {exposure});
+            if (ex.root()) gl::write_exr(ex.out() / ("fig7_" + key + ".exr"), im);
+            if (ex.root()) gl::write_png(ex.out() / ("fig7_" + key + ".png"), im, {exposure});
             if (modes[k] == gl::HybridMode::ept_vpt) {
                 // Fig. 7's last column: low order (EPT) and high order (VPT) of EPT+VPT.
-                gl::write_exr(ex.out() / "fig7_ept_vpt_low_order.exr", c.image(Composite::Part::ept));
-                gl::write_exr(ex.out() / "fig7_ept_vpt_high_order.exr", c.image(Composite::Part::vpt));
-                gl::write_png(ex.out() / "fig7_ept_vpt_low_order.png", c.image(Composite::Part::ept), {exposure});
-                gl::write_png(ex.out() / "fig7_ept_vpt_high_order.png", c.image(Composite::Part::vpt), {exposure});
+                if (ex.root()) gl::write_exr(ex.out() / "fig7_ept_vpt_low_order.exr", c.image(Composite::Part::ept));
+                if (ex.root()) gl::write_exr(ex.out() / "fig7_ept_vpt_high_order.exr", c.image(Composite::Part::vpt));
+                if (ex.root()) gl::write_png(ex.out() / "fig7_ept_vpt_low_order.png", c.image(Composite::Part::ept), {exposure});
+                if (ex.root()) gl::write_png(ex.out() / "fig7_ept_vpt_high_order.png", c.image(Composite::Part::vpt), {exposure});
             }
         }
         std::printf("  (Meng15 Fig. 7 shows images and curves only: equal quality EPT vs EPT+VPT, \"similar visual fidelity\" of the "
                     "TT-derived RTE parameters; MSE and variance vs core hours for the three techniques)\n");
-        const auto csv_path = ex.csv("meng15_fig7_glass_bead_cube.csv", curve);
-        ex.plot("meng15_fig7_glass_bead_cube", csv_path, ex.out() / "meng15_fig7_glass_bead_cube.png");
+        if (ex.root()) {
+            const auto csv_path = ex.csv("meng15_fig7_glass_bead_cube.csv", curve);
+            ex.plot("meng15_fig7_glass_bead_cube", csv_path, ex.out() / "meng15_fig7_glass_bead_cube.png");
+        }
         std::printf("wrote %s/fig7_{ept,ept_vpt,ept_vpt_da}.{exr,png}, fig7_ept_vpt_{low,high}_order.{exr,png}, "
                     "meng15_fig7_glass_bead_cube.{csv,png}\n",
                     ex.out().c_str());
+        meng15::rank_rows(j, ex, height);
         return ex.finish(j.num("cube_side", L).num("beads", beads).num("d_DA", g.diffusion.d_DA).integer("spp", spp));
     });
 }

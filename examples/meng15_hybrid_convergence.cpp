@@ -13,8 +13,11 @@
 //                             [--checkpoint SECONDS] [--resume]
 //
 // --checkpoint / --resume: one checkpoint per technique's render in --out (render_hybrid's
-// HybridOptions::checkpoint); the "P_a opt" techniques resume only with --pa pinned (a preview
-// measures timings, so its P_a differs between runs, and a checkpoint of another P_a is refused).
+// HybridOptions::checkpoint); the P_a a timed preview chose is kept beside them (checkpoint.hpp
+// decided), so a resumed run renders the "P_a opt" techniques with the killed run's P_a. Two
+// uninterrupted runs may differ there (the preview measures timings): pin --pa to compare them.
+// mpirun -np K: rank r renders the rows y % K == r of every render, rank 0 runs the previews and
+// sends their P_a to all; images and statistics are the single-process ones (bit-identical EXRs).
 //
 // The effective medium comes from the virtual scatterometer of the same grain
 // (precompute/scatterometer.hpp, make_effective_medium). Writes EXR + PNG per technique, a CSV of
@@ -29,6 +32,7 @@
 
 #include "common/checkpoint.hpp"
 #include "common/harness.hpp"
+#include "meng15_scenes.hpp"
 #include "grainlight/integrators/hybrid.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/media/teleportation.hpp"
@@ -76,6 +80,7 @@ int main(int argc, char** argv) {
         const double exposure = ex.opt<double>("exposure", 0.0, "PNG exposure in stops");
         ex.checkpointable();  // --checkpoint SECONDS / --resume: one checkpoint per technique's render
         ex.ready();
+        meng15::quiet_other_ranks(ex);
         const bool full = ex.full();
         const auto& out = ex.out();
         const int threads = ex.threads();
@@ -166,33 +171,33 @@ int main(int argc, char** argv) {
             opt.mode = t.mode;
             opt.ept.max_events = full ? 4096 : 1024;
             double Pa = 1.0;
+            std::string stem = t.name;  // file-name-safe label of this technique's render
+            for (char& c : stem) c = (c == ' ' || c == '+' || c == '=') ? '_' : char(std::tolower(c));
             if (t.optimal_pa && pa_pinned > 0.0) {
                 Pa = pa_pinned;
                 std::printf("  %-18s P_a pinned by --pa: %.3f\n", t.name.c_str(), Pa);
             } else if (t.optimal_pa) {
-                const gl::AcceptanceEstimate a =
-                    gl::estimate_optimal_acceptance(scene_ept, scene_vpt, agg, ctx, camera, int(spp), seed + 1, threads, opt,
-                                                    int(preview_stride));
-                Pa = pa_estimator == "paper"     ? a.P_a
-                     : pa_estimator == "moments" ? a.P_a_moments
-                     : pa_estimator == "robust"  ? a.P_a_robust
-                                                 : a.P_a_safe;
-                std::printf("  %-18s preview (every %dth pixel): V_L %.4g V_H %.4g t_L %.3g s t_H %.3g s -> P_a %.3f (Eq. 8), "
-                            "%.3f (moments), %.3f (robust, gain %.2f +- %.2f), %.3f (safe)\n",
-                            t.name.c_str(), int(preview_stride), a.V_L, a.V_H, a.t_L, a.t_H, a.P_a, a.P_a_moments,
-                            a.P_a_robust, a.gain, a.gain_se, a.P_a_safe);
+                // Rank 0 runs the timed preview; its P_a goes to every rank and, with --checkpoint,
+                // into --out, so that --resume renders with the killed run's P_a.
+                Pa = decided(ex, stem + ".pa", [&] {
+                    const gl::AcceptanceEstimate a = gl::estimate_optimal_acceptance(scene_ept, scene_vpt, agg, ctx, camera, int(spp),
+                                                                                     seed + 1, threads, opt, int(preview_stride));
+                    const double P = pa_estimator == "paper"     ? a.P_a
+                                     : pa_estimator == "moments" ? a.P_a_moments
+                                     : pa_estimator == "robust"  ? a.P_a_robust
+                                                                 : a.P_a_safe;
+                    std::printf("  %-18s preview (every %dth pixel): V_L %.4g V_H %.4g t_L %.3g s t_H %.3g s -> P_a %.3f (Eq. 8), "
+                                "%.3f (moments), %.3f (robust, gain %.2f +- %.2f), %.3f (safe)\n",
+                                t.name.c_str(), int(preview_stride), a.V_L, a.V_H, a.t_L, a.t_H, a.P_a, a.P_a_moments,
+                                a.P_a_robust, a.gain, a.gain_se, a.P_a_safe);
+                    return std::vector<double>{P};
+                })[0];
             }
             opt.acceptance = Pa;
-            std::string stem = t.name;  // file-name-safe label of this technique's render
-            for (char& c : stem) c = (c == ' ' || c == '+' || c == '=') ? '_' : char(std::tolower(c));
-            opt.checkpoint = checkpoint_for(ex, stem);
-            // P_a from a timed preview differs between runs: a checkpoint of another P_a is refused
-            // (pin --pa to resume the "P_a opt" renders).
-            opt.checkpoint.key ^= std::hash<double>{}(Pa);
-            ProgressBar bar = ex.progress(t.name, std::uint64_t(height));
-            const gl::HybridImages img = gl::render_hybrid(scene_ept, scene_vpt, agg, ctx, camera, int(spp), seed, threads, opt, 1,
-                                                           [&](int n) { bar.advance(std::uint64_t(n)); });
-            bar.done();
+            // One checkpoint per technique (its key mixed with P_a), this rank's rows, films shared
+            // by all ranks (meng15_scenes.hpp).
+            const gl::HybridImages img =
+                meng15::render_hybrid_run(ex, stem, scene_ept, scene_vpt, agg, ctx, camera, int(spp), seed, opt, t.name);
             const gl::Image all = img.combined();
             const double mean = (all.mean(0) + all.mean(1) + all.mean(2)) / 3.0;
             const double npx = double(width) * double(height);
@@ -218,18 +223,18 @@ int main(int argc, char** argv) {
                         100.0 * rel, sw_frac, da);
             std::string file = t.name;
             for (char& c : file) c = (c == ' ' || c == '+' || c == '=') ? '_' : char(std::tolower(c));
-            gl::write_exr(out / ("hybrid_" + file + ".exr"), all);
-            gl::write_png(out / ("hybrid_" + file + ".png"), all, {exposure});
-            gl::write_exr(out / ("hybrid_" + file + "_high.exr"), img.high.image());
+            if (ex.root()) gl::write_exr(out / ("hybrid_" + file + ".exr"), all);
+            if (ex.root()) gl::write_png(out / ("hybrid_" + file + ".png"), all, {exposure});
+            if (ex.root()) gl::write_exr(out / ("hybrid_" + file + "_high.exr"), img.high.image());
             if (t.mode == gl::HybridMode::ept_vpt && !t.optimal_pa) {
                 // Switch depth (Meng15 Fig. 12, bottom right): grain interactions in EPT before the switch.
                 gl::Image d = img.switch_depth;
                 float dmax = 0;
                 for (float v : d.rgb) dmax = std::max(dmax, v);
-                gl::write_exr(out / "hybrid_switch_depth.exr", d);
+                if (ex.root()) gl::write_exr(out / "hybrid_switch_depth.exr", d);
                 if (dmax > 0)
                     for (float& v : d.rgb) v /= dmax;
-                gl::write_png(out / "hybrid_switch_depth.png", d);
+                if (ex.root()) gl::write_png(out / "hybrid_switch_depth.png", d);
                 std::printf("  %18s switch depth: mean over pixels %.2f, max %.2f grain interactions "
                             "(hybrid_switch_depth.png, white = max)\n",
                             "", img.switch_depth.mean(0), double(dmax));
@@ -263,12 +268,15 @@ int main(int argc, char** argv) {
         }
         std::printf("  (paper: Table 2 speedups over EPT across SPICES, SANDCASTLE, SNOWMAN LG./SM.; ttuv in CPU seconds x "
                     "variance, our units: scene radiance^2 x core-seconds)\n");
-        gl::write_exr(out / "hybrid_side_by_side.exr", strip);
-        gl::write_png(out / "hybrid_side_by_side.png", strip, {exposure});
-        const auto csv_path = ex.csv("meng15_hybrid_convergence.csv", csv);
-        ex.plot("meng15_hybrid_convergence", csv_path, out / "meng15_hybrid_convergence.png");
+        if (ex.root()) gl::write_exr(out / "hybrid_side_by_side.exr", strip);
+        if (ex.root()) gl::write_png(out / "hybrid_side_by_side.png", strip, {exposure});
+        if (ex.root()) {
+            const auto csv_path = ex.csv("meng15_hybrid_convergence.csv", csv);
+            ex.plot("meng15_hybrid_convergence", csv_path, out / "meng15_hybrid_convergence.png");
+        }
         std::printf("wrote %s/hybrid_*.{exr,png} (hybrid_side_by_side: EPT | EPT+VPT | EPT+VPT+DA), meng15_hybrid_convergence.{csv,png}\n", out.c_str());
         json.num("d_DA", diffusion.d_DA).integer("spp", (long long)spp);
+        meng15::rank_rows(json, ex, height);
         return ex.finish(json);
     });
 }

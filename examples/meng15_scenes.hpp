@@ -12,10 +12,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "common/checkpoint.hpp"
 #include "common/harness.hpp"
 #include "grainlight/geometry/grains.hpp"
 #include "grainlight/geometry/procedural_boundaries.hpp"
@@ -114,6 +116,43 @@ struct Panel {
     const Camera* camera = nullptr;
 };
 
+/// Rank 0 prints the tables and the summary line; the other ranks' stdout goes to /dev/null (their
+/// results are the same: render_hybrid_run gives every rank the whole render).
+inline void quiet_other_ranks(const Example& ex) {
+    if (!ex.root()) std::fflush(stdout), (void)std::freopen("/dev/null", "w", stdout);
+}
+
+/// One hybrid render of an example, resumable and split over the MPI ranks: this rank renders its
+/// rows (row_offset = rank, row_stride = ranks) with the checkpoint `stem` (checkpoint_for; its
+/// key mixed with opt.acceptance, so a checkpoint of another P_a is refused), then every film's
+/// rows are assembled on every rank (MpiSession::share_film_rows: a placement in row order, no
+/// sum) and summarized once (summarize_hybrid). Every rank thus holds the single-process result:
+/// the same images, variances, counters and CPU seconds (the sum of all ranks' row times, as
+/// one process's threads would sum them), so the decisions taken from it are the same too.
+template <class Scene, class Shape, class Distance, class Camera>
+gl::HybridImages render_hybrid_run(const Example& ex, const std::string& stem, const Scene& ept, const Scene& vpt,
+                                   const gl::GranularAggregate<Shape>& agg, const gl::HybridContext<Distance>& ctx,
+                                   const Camera& cam, int spp, std::uint64_t seed, gl::HybridOptions opt,
+                                   const std::string& label) {
+    opt.row_offset = ex.rank();
+    opt.row_stride = ex.ranks();
+    opt.checkpoint = checkpoint_for(ex, stem);
+    if (!opt.checkpoint.path.empty()) opt.checkpoint.key ^= std::hash<double>{}(opt.acceptance);
+    ProgressBar bar = ex.progress(label, std::uint64_t(cam.height()));
+    gl::HybridFilms f = gl::render_hybrid_films(ept, vpt, agg, ctx, cam, spp, seed, ex.threads(), opt, 1,
+                                                [&](int n) { bar.advance(std::uint64_t(n)); });
+    bar.done();
+    if (ex.ranks() > 1)
+        for (auto& film : f.films) film = ex.mpi().share_film_rows(film);
+    return gl::summarize_hybrid(std::move(f));
+}
+
+/// The rows each rank rendered, for the JSON summaries ("rank_rows": rank r renders the rows
+/// y with y % ranks == r; "rank_row_counts": how many of `height`).
+inline Json& rank_rows(Json& j, const Example& ex, int height) {
+    return j.str("rank_rows", "rank r renders the rows y with y % ranks == r").nums("rank_row_counts", ex.mpi().row_counts(height));
+}
+
 /// K panels of equal size rendered with one technique, measured as one image side by side.
 struct Composite {
     std::vector<gl::HybridImages> panels;
@@ -175,19 +214,19 @@ inline Composite compose(std::vector<gl::HybridImages> panels) {
     return c;
 }
 
-/// Render every panel with `opt` (per-panel acceptance P_a[k] if given) and compose.
+/// Render every panel with `opt` (per-panel acceptance P_a[k] if given) and compose; each panel is
+/// one render_hybrid_run (its checkpoint stem: `label` and, with several panels, the panel's name).
 template <class Shape, class Distance, class Camera>
-Composite render_panels(const std::vector<Panel<Shape, Distance, Camera>>& panels, int spp, std::uint64_t seed, int threads,
-                        gl::HybridOptions opt, const std::string& label, const std::vector<double>& P_a = {}) {
+Composite render_panels(const Example& ex, const std::vector<Panel<Shape, Distance, Camera>>& panels, int spp,
+                        std::uint64_t seed, gl::HybridOptions opt, const std::string& label,
+                        const std::vector<double>& P_a = {}) {
     std::vector<gl::HybridImages> imgs;
     for (std::size_t k = 0; k < panels.size(); ++k) {
         const auto& p = panels[k];
         if (k < P_a.size()) opt.acceptance = P_a[k];
-        ProgressBar bar(label + (panels.size() > 1 ? " " + p.name : std::string()), std::uint64_t(p.camera->height()));
+        const std::string name = label + (panels.size() > 1 ? " " + p.name : std::string());
         // Each panel its own generator stream (seed + k): panels are independent images.
-        imgs.push_back(gl::render_hybrid(*p.ept, *p.vpt, *p.agg, *p.ctx, *p.camera, spp, seed + 7919 * k, threads, opt, 1,
-                                         [&](int n) { bar.advance(std::uint64_t(n)); }));
-        bar.done();
+        imgs.push_back(render_hybrid_run(ex, name, *p.ept, *p.vpt, *p.agg, *p.ctx, *p.camera, spp, seed + 7919 * k, opt, name));
     }
     return compose(std::move(imgs));
 }

@@ -21,7 +21,13 @@
 //
 //   meng15_table2_ttuv [--quality quick|full] [--out DIR] [--seed S] [--threads N] [--scenes a,b]
 //                      [--spp N] [--width W] [--size R] [--castle-size C] [--absorption A] [--preview-stride K]
-//                      [--obj FILE]
+//                      [--obj FILE] [--pa P] [--checkpoint SECONDS] [--resume]
+//
+// --checkpoint / --resume: one checkpoint per scene, technique and panel in --out, and the P_a the
+// timed previews chose beside them (a resumed run renders with the killed run's P_a); --pa pins
+// P_a (no preview) when two runs must give the same images. mpirun -np K: rank r renders the rows
+// y % K == r of every render (meng15_scenes.hpp render_hybrid_run), rank 0 runs the previews and
+// sends their P_a to all ranks.
 //
 // ttuv per measuring.md: per pixel the sample variance over spp >= 8 independent bundle samples
 // (B = spp batches), averaged over the pixels, times the thread CPU seconds of a 1-spp image;
@@ -35,6 +41,7 @@
 #include <string>
 #include <vector>
 
+#include "common/checkpoint.hpp"
 #include "common/harness.hpp"
 #include "meng15_scenes.hpp"
 #include "grainlight/geometry/grains.hpp"
@@ -97,6 +104,7 @@ struct RunConfig {
     int max_events = 4096;
     int vpt_depth = 4096;
     double exposure = 0;
+    double pa_pinned = 0;  ///< --pa: P_a of the "P_a opt" rows without a preview (0: preview)
 };
 
 // One scene: one or more panels (equal sizes) measured as one image (meng15_scenes.hpp).
@@ -127,19 +135,29 @@ SceneResult run_scene(const Example& ex, const std::string& key, const std::vect
         opt.vpt.max_depth = rc.vpt_depth;
         double Pa = 1.0;
         std::vector<double> Pa_panel;
-        if (t.opt) {
-            // Per panel (per aggregate) P_a; the row's P_a is their largest.
-            Pa = 0.0;
-            for (const auto& p : panels) {
-                const gl::AcceptanceEstimate a = gl::estimate_optimal_acceptance(
-                    *p.ept, *p.vpt, *p.agg, *p.ctx, *p.camera, rc.spp, rc.seed + 1, rc.threads, opt, rc.preview_stride);
-                Pa_panel.push_back(a.P_a_safe);
-                Pa = std::max(Pa, a.P_a_safe);
-                std::printf("  %-18s %s preview (every %dth pixel): V_L %.3g V_H %.3g t_L %.3g t_H %.3g -> Eq. 8 %.3f; moments %.3f; "
-                            "robust V %.3g E[H^2] %.3g -> %.3f (predicted gain %.2f +- %.2f) -> P_a %.3f\n",
-                            t.name, p.name.c_str(), rc.preview_stride, a.V_L, a.V_H, a.t_L, a.t_H, a.P_a, a.P_a_moments,
-                            a.V_robust, a.M_robust, a.P_a_robust, a.gain, a.gain_se, a.P_a_safe);
-            }
+        if (t.opt && rc.pa_pinned > 0) {
+            Pa = rc.pa_pinned;
+            Pa_panel.assign(panels.size(), Pa);
+            std::printf("  %-18s P_a pinned by --pa: %.3f\n", t.name, Pa);
+        } else if (t.opt) {
+            // Per panel (per aggregate) P_a; the row's P_a is their largest. Rank 0 runs the timed
+            // previews, every rank gets their P_a, and --checkpoint keeps them for --resume
+            // (checkpoint.hpp decided): a resumed run renders with the killed run's P_a.
+            std::string stem = key + "_" + t.name + ".pa";
+            Pa_panel = decided(ex, stem, [&] {
+                std::vector<double> v;
+                for (const auto& p : panels) {
+                    const gl::AcceptanceEstimate a = gl::estimate_optimal_acceptance(
+                        *p.ept, *p.vpt, *p.agg, *p.ctx, *p.camera, rc.spp, rc.seed + 1, rc.threads, opt, rc.preview_stride);
+                    v.push_back(a.P_a_safe);
+                    std::printf("  %-18s %s preview (every %dth pixel): V_L %.3g V_H %.3g t_L %.3g t_H %.3g -> Eq. 8 %.3f; moments "
+                                "%.3f; robust V %.3g E[H^2] %.3g -> %.3f (predicted gain %.2f +- %.2f) -> P_a %.3f\n",
+                                t.name, p.name.c_str(), rc.preview_stride, a.V_L, a.V_H, a.t_L, a.t_H, a.P_a, a.P_a_moments,
+                                a.V_robust, a.M_robust, a.P_a_robust, a.gain, a.gain_se, a.P_a_safe);
+                }
+                return v;
+            });
+            Pa = *std::max_element(Pa_panel.begin(), Pa_panel.end());
         }
         const bool all_one = std::all_of(Pa_panel.begin(), Pa_panel.end(), [](double v) { return v == 1.0; });
         opt.acceptance = 1.0;
@@ -153,7 +171,7 @@ SceneResult run_scene(const Example& ex, const std::string& key, const std::vect
             m.technique = t.name;
             m.reused = true;
         } else {
-            img = meng15::render_panels(panels, rc.spp, rc.seed, rc.threads, opt, key + " " + t.name, Pa_panel);
+            img = meng15::render_panels(ex, panels, rc.spp, rc.seed, opt, key + " " + t.name, Pa_panel);
             const gl::Image all = img.image(Composite::Part::combined);
             m.mean = img.mean;
             m.mean_se = img.mean_se;
@@ -166,14 +184,14 @@ SceneResult run_scene(const Example& ex, const std::string& key, const std::vect
             m.cpu = img.cpu();
             std::string file = key + "_" + t.name;
             for (char& ch : file) ch = (ch == ' ' || ch == '+' || ch == '=') ? '_' : char(std::tolower(ch));
-            gl::write_exr(ex.out() / (file + ".exr"), all);
-            gl::write_png(ex.out() / (file + ".png"), all, {rc.exposure});
+            if (ex.root()) gl::write_exr(ex.out() / (file + ".exr"), all);
+            if (ex.root()) gl::write_png(ex.out() / (file + ".png"), all, {rc.exposure});
             if (t.mode == gl::HybridMode::ept_vpt_da) {
                 // Fig. 12: per-technique contributions and the switch depth.
-                gl::write_exr(ex.out() / (file + "_ept.exr"), img.image(Composite::Part::ept));
-                gl::write_exr(ex.out() / (file + "_vpt.exr"), img.image(Composite::Part::vpt));
-                gl::write_exr(ex.out() / (file + "_da.exr"), img.image(Composite::Part::da));
-                gl::write_exr(ex.out() / (file + "_switch_depth.exr"), img.image(Composite::Part::switch_depth));
+                if (ex.root()) gl::write_exr(ex.out() / (file + "_ept.exr"), img.image(Composite::Part::ept));
+                if (ex.root()) gl::write_exr(ex.out() / (file + "_vpt.exr"), img.image(Composite::Part::vpt));
+                if (ex.root()) gl::write_exr(ex.out() / (file + "_da.exr"), img.image(Composite::Part::da));
+                if (ex.root()) gl::write_exr(ex.out() / (file + "_switch_depth.exr"), img.image(Composite::Part::switch_depth));
             }
         }
         if (t.mode == gl::HybridMode::ept) ept_row = m;
@@ -242,7 +260,12 @@ int main(int argc, char** argv) {
         const int level = ex.opt<int>("grain-level", 3, 4, "icosphere level of the snow grain mesh");
         const double exposure = ex.opt<double>("exposure", 0.0, "PNG exposure in stops");
         const std::string obj = ex.opt<std::string>("obj", "", "closed OBJ mesh for the scene 'obj' (scaled to --size grain radii tall)");
+        const auto pa_given = ex.opt_optional<double>(
+            "pa", "pin P_a of the 'P_a opt' techniques to this value in (0, 1] (no preview; reproducible images)");
+        ex.checkpointable();  // --checkpoint SECONDS / --resume: one checkpoint per scene, technique and panel
         ex.ready();
+        meng15::quiet_other_ranks(ex);
+        if (pa_given && !(*pa_given > 0.0 && *pa_given <= 1.0)) throw cli_error("--pa = " + ex.given_text("pa") + " must be in (0, 1]");
         if (spp < 8 || spp > 4096) throw cli_error("--spp must be in [8, 4096] (measuring.md: >= 8 batches)");
         if (width < 8 || width > 2048) throw cli_error("--width must be in [8, 2048]");
         if (!(size >= 10 && size <= 5000)) throw cli_error("--size must be in [10, 5000] grain radii");
@@ -272,6 +295,7 @@ int main(int argc, char** argv) {
         rc.seed = ex.seed();
         rc.threads = ex.threads();
         rc.exposure = exposure;
+        rc.pa_pinned = pa_given ? *pa_given : 0.0;
         const int height = std::max(6, width * 3 / 4);
 
         const meng15::Grains g = meng15::make_snow_grains(ex.seed(), ex.full(), absorption, level);
@@ -381,14 +405,17 @@ int main(int argc, char** argv) {
             scenes_json += ':';
             scenes_json += r.json;
         }
-        const auto csv_path = ex.csv("meng15_table2_ttuv.csv", csv);
-        ex.plot("meng15_table2_ttuv", csv_path, ex.out() / "meng15_table2_ttuv.png");
+        if (ex.root()) {
+            const auto csv_path = ex.csv("meng15_table2_ttuv.csv", csv);
+            ex.plot("meng15_table2_ttuv", csv_path, ex.out() / "meng15_table2_ttuv.png");
+        }
         std::printf("wrote %s/*.{exr,png} (per scene and technique; *_ept/_vpt/_da/_switch_depth.exr: Fig. 12's "
                     "contributions), meng15_table2_ttuv.{csv,png}\n",
                     ex.out().c_str());
         // Last line: {"scenes": {...}} first (the issue's shape), then the run's metadata.
-        const std::string meta = ex.summary().num("d_DA", g.diffusion.d_DA).integer("spp", spp).str();
-        std::cout << "{\"scenes\":{" << scenes_json << "}," << meta.substr(1) << std::endl;
-        return 0;
+        Json meta = ex.summary();
+        meta.num("d_DA", g.diffusion.d_DA).integer("spp", spp);
+        meng15::rank_rows(meta, ex, height);
+        return ex.finish_line("{\"scenes\":{" + scenes_json + "}," + meta.str().substr(1));
     });
 }

@@ -9,7 +9,10 @@
 
 #include <cctype>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <filesystem>
 #include <functional>
 #include <string>
@@ -18,6 +21,7 @@
 
 #include "common/cli.hpp"
 #include "common/harness.hpp"
+#include "common/output.hpp"
 #include "grainlight/integrators/render.hpp"
 
 namespace gl_examples {
@@ -65,6 +69,54 @@ inline grainlight::CheckpointOptions checkpoint_for(const Example& ex, const std
     auto c = checkpoint_file(ex.cli(), ex.out(), ex.name(), stem, rank_tag);
     if (!c.path.empty()) ex.track_checkpoint(c.path);
     return c;
+}
+
+/// Values a run decides from its own timings (a timed preview's P_a, an equal-time sample count):
+/// rank 0 calls `decide()` and every rank gets its values (MpiSession::broadcast), so all ranks
+/// render the same image. With --checkpoint / --resume rank 0 also keeps them in --out as
+/// <example>.<stem>.decision (atomic write; key = the run's fingerprint mixed with the stem), and
+/// --resume reads them back instead of deciding again, so a resumed run renders exactly what the
+/// killed run would have (its checkpoints were made with these values). ex.finish() removes it.
+template <class Decide>
+std::vector<double> decided(const Example& ex, const std::string& stem, Decide&& decide) {
+    std::string safe = stem;
+    for (char& ch : safe)
+        if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '.') ch = '_';
+    const grainlight::CheckpointOptions c = checkpoint_from_cli(ex.cli(), ex.out() / (ex.name() + "." + safe + ".decision"));
+    const std::uint64_t key = c.key ^ std::hash<std::string>{}(safe);
+    std::vector<double> v;
+    if (ex.root()) {
+        bool loaded = false;
+        if (!c.path.empty() && c.resume && std::filesystem::exists(c.path)) {
+            std::ifstream in(c.path);
+            std::string magic, hex;
+            unsigned long long k = 0;
+            std::size_t n = 0;
+            if (!(in >> magic >> k >> n) || magic != "grainlight-decision")
+                throw cli_error("--resume: '" + c.path.string() + "' is not a decision file; delete it or run without --resume");
+            if (k != key)
+                throw cli_error("--resume: '" + c.path.string() +
+                                "' was written by a run with other arguments; delete it or run without --resume");
+            for (std::size_t i = 0; i < n && in >> hex; ++i) v.push_back(std::strtod(hex.c_str(), nullptr));
+            if (v.size() != n) throw cli_error("--resume: '" + c.path.string() + "' is truncated; delete it");
+            loaded = true;
+        }
+        if (!loaded) {
+            v = decide();
+            if (!c.path.empty()) {
+                std::string text = "grainlight-decision " + std::to_string(key) + " " + std::to_string(v.size());
+                char buf[64];
+                for (double x : v) {
+                    std::snprintf(buf, sizeof buf, " %a", x);  // hexadecimal: exact
+                    text += buf;
+                }
+                write_text_atomic(c.path, text + "\n");
+            }
+        }
+    }
+    ex.mpi().broadcast(v);
+    if (!c.path.empty()) ex.track_checkpoint(c.path);
+    return v;
 }
 
 /// RenderOptions of one render of a harness example: spp, the example's seed and threads, this

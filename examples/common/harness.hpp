@@ -203,12 +203,14 @@ public:
     }
     /// Print the summary as the last stdout line (rank 0 only) and remove the checkpoints of this
     /// completed run; returns the exit status 0.
-    int finish(const Json& j) const {
+    int finish(const Json& j) const { return finish_line(j.str()); }
+    /// finish() with the summary line given as text (a JSON object built by hand).
+    int finish_line(const std::string& json_line) const {
         for (const auto& p : checkpoints_) {
             std::error_code ec;
             std::filesystem::remove(p, ec);
         }
-        if (root()) std::cout << j.str() << std::endl;
+        if (root()) std::cout << json_line << std::endl;
         return 0;
     }
 

@@ -8,8 +8,9 @@
 // Work splits: renders give rank r the rows y with y % K == r (RenderOptions::row_offset /
 // row_stride: interleaved rows balance a centred object), precomputations a contiguous block range
 // (block_range). Reductions: gather_bytes collects each rank's serialized partial on rank 0 in rank
-// order; gather_film_rows assembles a film from the ranks' rows (a placement, not a sum); sum_to_root
-// adds per-rank vectors in rank order.
+// order; gather_film_rows assembles a film from the ranks' rows (a placement, not a sum), and
+// share_film_rows gives that film to every rank; sum_to_root adds per-rank vectors in rank order;
+// broadcast sends rank 0's decisions (a timed preview's choice) to all ranks.
 #pragma once
 
 #include <algorithm>
@@ -177,6 +178,60 @@ public:
         }
 #endif
         return values;
+    }
+
+    /// Rank 0's bytes on every rank (`bytes` is replaced elsewhere).
+    void broadcast_bytes(std::vector<unsigned char>& bytes) const {
+#if defined(GRAINLIGHT_EXAMPLES_MPI)
+        if (size_ > 1) {
+            unsigned long long n = bytes.size();
+            MPI_Bcast(&n, 1, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
+            bytes.resize(std::size_t(n));
+            constexpr unsigned long long chunk = 1ull << 30;
+            for (unsigned long long off = 0; off < n; off += chunk)
+                MPI_Bcast(bytes.data() + off, int(std::min<unsigned long long>(chunk, n - off)), MPI_BYTE, 0, MPI_COMM_WORLD);
+        }
+#else
+        (void)bytes;
+#endif
+    }
+
+    /// Rank 0's values on every rank (decisions rank 0 takes from its own timings: every rank
+    /// then renders the same image).
+    void broadcast(std::vector<double>& values) const {
+        if (size_ == 1) return;
+        std::vector<unsigned char> b(values.size() * sizeof(double));
+        if (!b.empty()) std::memcpy(b.data(), values.data(), b.size());
+        broadcast_bytes(b);
+        values.resize(b.size() / sizeof(double));
+        if (!b.empty()) std::memcpy(values.data(), b.data(), b.size());
+    }
+
+    /// gather_film_rows, then the complete film on every rank (not only rank 0): every rank can
+    /// summarize the same film and take the same decisions from it.
+    [[nodiscard]] grainlight::Film share_film_rows(const grainlight::Film& local) const {
+        if (size_ == 1) return local;
+        const int w = local.width(), h = local.height();
+        grainlight::Film full = gather_film_rows(local);
+        std::vector<unsigned char> bytes;
+        if (root())
+            for (int y = 0; y < h; ++y) append_row(full, y, bytes);
+        broadcast_bytes(bytes);
+        if (root()) return full;
+        const std::size_t n = std::size_t(w) * std::size_t(h);
+        std::vector<double> sums(3 * n), weights(n);
+        std::vector<std::uint32_t> nonfinite(n);
+        const unsigned char* p = bytes.data();
+        for (int y = 0; y < h; ++y) {
+            const std::size_t i0 = std::size_t(y) * std::size_t(w);
+            std::memcpy(sums.data() + 3 * i0, p, 3 * std::size_t(w) * sizeof(double));
+            p += 3 * std::size_t(w) * sizeof(double);
+            std::memcpy(weights.data() + i0, p, std::size_t(w) * sizeof(double));
+            p += std::size_t(w) * sizeof(double);
+            std::memcpy(nonfinite.data() + i0, p, std::size_t(w) * sizeof(std::uint32_t));
+            p += std::size_t(w) * sizeof(std::uint32_t);
+        }
+        return grainlight::Film::from_accumulators(w, h, std::move(sums), std::move(weights), std::move(nonfinite));
     }
 
 private:

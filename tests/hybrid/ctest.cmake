@@ -145,3 +145,15 @@ if(TARGET meng15_fig7_glass_bead_cube OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS $
   add_test(NAME meng15_fig7_glass_bead_cube_bad_beads COMMAND $<TARGET_FILE:meng15_fig7_glass_bead_cube> --beads 1)
   set_tests_properties(meng15_fig7_glass_bead_cube_bad_beads PROPERTIES WILL_FAIL TRUE LABELS "example;hybrid")
 endif()
+
+# MPI scale-out (ecosystem issue): meng15_hybrid_convergence on 2 ranks (rank r renders the rows
+# y % 2 == r of every render, the films are shared, rank 0 decides) writes the EPT+VPT+DA image of
+# the pinned-P_a technique byte-identical to one process and reports "ranks": 2 (~3 CPU s).
+if(TARGET MPI::MPI_CXX AND MPIEXEC_EXECUTABLE AND GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/meng15_hybrid_convergence.cpp)
+  add_test(NAME meng15_hybrid_convergence_mpi
+           COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/common/mpi_compare.sh ${MPIEXEC_EXECUTABLE} 2
+                   ${CMAKE_CURRENT_BINARY_DIR}/mpi_meng15_hybrid_work hybrid_ept_vpt_da_pa_opt.exr
+                   $<TARGET_FILE:meng15_hybrid_convergence> --spp 2 --radius 10 --width 32 --pa 0.5 --seed 3)
+  set_tests_properties(meng15_hybrid_convergence_mpi PROPERTIES LABELS "example;hybrid;mpi" TIMEOUT 300
+    PASS_REGULAR_EXPRESSION "byte-identical to one process")
+endif()

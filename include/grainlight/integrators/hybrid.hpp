@@ -793,14 +793,29 @@ struct HybridImages {
     [[nodiscard]] double ttuv_low() const noexcept { return spp > 0 ? var_low * cpu_seconds_low / double(spp) : 0.0; }
 };
 
+/// What render_hybrid_films renders: the 8 films of the row driver (HybridFilms::Slot: the low /
+/// high / DA images, then per-pixel statistics and per-row CPU times and counters as exact
+/// doubles), everything summarize_hybrid needs. The seam for splitting a render over processes:
+/// each renders its rows (HybridOptions::row_offset / row_stride), the films' rows are assembled
+/// (a placement, no sum: the rows are disjoint), then summarized once, so the summary is the
+/// same as a single process's.
+struct HybridFilms {
+    /// Film slots.
+    enum Slot : int { low, high, da, var, m2_depth, seconds, count_a, count_b, slots };
+    std::vector<Film> films;                ///< `slots` films of equal size
+    int spp = 0;                            ///< bundles per pixel
+    HybridMode mode = HybridMode::ept_vpt;  ///< the techniques of the render
+};
+
 /// Render with the hybrid integrator: every `stride`-th pixel in x and y (stride 1: the full
 /// image; the result then has ceil(w / stride) x ceil(h / stride) pixels, each the centre pixel
 /// of its block with the original footprint), `spp` bundles of opt.bundle_size paths per pixel.
 /// Path i of bundle b of pixel p uses Pcg32::from_key(seed, p, b * N + i) (p = full-image pixel
-/// index): images are bit-identical for any thread count. Rows over OpenMP threads.
+/// index): images are bit-identical for any thread count. Rows over OpenMP threads. Returns the
+/// raw films (render_hybrid = summarize_hybrid of these).
 template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, class Progress = NoProgress>
     requires PhaseMedium<typename Scene::Medium>
-[[nodiscard]] HybridImages render_hybrid(const Scene& scene_ept, const Scene& scene_vpt, const GranularAggregate<Shape>& agg,
+[[nodiscard]] HybridFilms render_hybrid_films(const Scene& scene_ept, const Scene& scene_vpt, const GranularAggregate<Shape>& agg,
                                          const HybridContext<Distance>& ctx, const Camera& camera, int spp,
                                          std::uint64_t seed, int threads, HybridOptions opt, int stride = 1,
                                          Progress&& progress = {}) {
@@ -821,21 +836,22 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
     const int W = camera.width(), H = camera.height();
     const int w = (W + stride - 1) / stride, h = (H + stride - 1) / stride;
     const int N = opt.bundle_size;
-    HybridImages img;
-    img.low = Film(w, h);
-    img.high = Film(w, h);
-    img.da = Film(w, h);
-    img.switch_depth = Image(w, h);
-    img.spp = spp;
-    img.mode = opt.mode;
-    img.pixel_variance = Image(w, h);
-    img.pixel_m2_high = Image(w, h);
     // The row driver (render_rows: threads, row shares, checkpoints) renders into 8 films: the
     // low / high / DA images, then per-pixel statistics as exact doubles (add_rgb once per pixel):
     // (var_total, var_low, var_high), (E[H^2], mean switch depth, 0); per row at pixel (0, y): (CPU
     // seconds low, high, 0) and the counters. Everything the summary below needs is in the films,
     // so a resumed render (checkpointed films) gives the same result as an uninterrupted one.
-    enum : int { f_low, f_high, f_da, f_var, f_m2_depth, f_seconds, f_count_a, f_count_b, n_films };
+    enum : int {
+        f_low = HybridFilms::low,
+        f_high = HybridFilms::high,
+        f_da = HybridFilms::da,
+        f_var = HybridFilms::var,
+        f_m2_depth = HybridFilms::m2_depth,
+        f_seconds = HybridFilms::seconds,
+        f_count_a = HybridFilms::count_a,
+        f_count_b = HybridFilms::count_b,
+        n_films = HybridFilms::slots
+    };
     RenderOptions ro;
     ro.spp = spp;
     ro.seed = seed;
@@ -907,7 +923,32 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
             f[f_count_b].add_rgb(0, y, double(rc.switch_depth), double(rc.da), double(rc.grain_rays));
         },
         std::forward<Progress>(progress));
-    // Per-row sums in x order, then rows in order (the same sums for any thread count or resume).
+    return HybridFilms{std::move(films), spp, opt.mode};
+}
+
+/// The images and summary (variances, CPU times, counters) of a hybrid render from its films.
+/// Per-row sums in x order, then rows in order: the same for any thread count, resume or row split.
+[[nodiscard]] inline HybridImages summarize_hybrid(HybridFilms hf) {
+    check_argument(hf.films.size() == std::size_t(HybridFilms::slots), "summarize_hybrid", "films", hf.films.size(),
+                   std::to_string(int(HybridFilms::slots)));
+    std::vector<Film>& films = hf.films;
+    const int w = films[0].width(), h = films[0].height();
+    enum : int {
+        f_low = HybridFilms::low,
+        f_high = HybridFilms::high,
+        f_da = HybridFilms::da,
+        f_var = HybridFilms::var,
+        f_m2_depth = HybridFilms::m2_depth,
+        f_seconds = HybridFilms::seconds,
+        f_count_a = HybridFilms::count_a,
+        f_count_b = HybridFilms::count_b
+    };
+    HybridImages img;
+    img.switch_depth = Image(w, h);
+    img.spp = hf.spp;
+    img.mode = hf.mode;
+    img.pixel_variance = Image(w, h);
+    img.pixel_m2_high = Image(w, h);
     auto raw = [&](int k, int x, int y, int c) {
         return films[std::size_t(k)].sums()[3 * (std::size_t(y) * std::size_t(w) + std::size_t(x)) + std::size_t(c)];
     };
@@ -954,6 +995,17 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
     img.var_high /= np;
     img.m2_high /= np;
     return img;
+}
+
+/// Render with the hybrid integrator (render_hybrid_films, then summarize_hybrid).
+template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, class Progress = NoProgress>
+    requires PhaseMedium<typename Scene::Medium>
+[[nodiscard]] HybridImages render_hybrid(const Scene& scene_ept, const Scene& scene_vpt, const GranularAggregate<Shape>& agg,
+                                         const HybridContext<Distance>& ctx, const Camera& camera, int spp,
+                                         std::uint64_t seed, int threads, HybridOptions opt, int stride = 1,
+                                         Progress&& progress = {}) {
+    return summarize_hybrid(render_hybrid_films(scene_ept, scene_vpt, agg, ctx, camera, spp, seed, threads, std::move(opt), stride,
+                                                std::forward<Progress>(progress)));
 }
 
 /// The preview of Meng15 Sec. 5 for P_a: V_L, V_H (mean pixel variances of the low- and
