@@ -243,6 +243,45 @@ TEST_CASE("render_hybrid: a render resumed from a partial checkpoint equals the 
     CHECK(res.counters.da == ref.counters.da);
     CHECK(res.counters.da > 0);  // the DA part ran: the statistics compared are not all zero
     CHECK(res.cpu_seconds_low + res.cpu_seconds_high > 0);
+    // Row shares (what MPI ranks render): three processes' films, each row taken from the share
+    // that rendered it (y % 3), summarized once, equal the single render: the seam between
+    // render_hybrid_films and summarize_hybrid that the examples' gather goes through.
+    {
+        HybridOptions so = opt;
+        so.checkpoint = {};
+        so.row_stride = 3;
+        std::vector<HybridFilms> parts;
+        for (int r = 0; r < 3; ++r) {
+            so.row_offset = r;
+            parts.push_back(render_hybrid_films(s.ept, s.vpt, s.agg, ctx, cam, 2, 7, 1, so));
+        }
+        CHECK(parts[1].films[HybridFilms::low].image().at(0, 0, 1) == 0.0f);  // row 0 is share 0's
+        HybridFilms whole = parts[0];
+        for (std::size_t k = 0; k < whole.films.size(); ++k) {
+            const int w = whole.films[k].width(), h = whole.films[k].height();
+            std::vector<double> sums(3 * std::size_t(w * h)), weights(std::size_t(w * h));
+            std::vector<std::uint32_t> nonfinite(std::size_t(w * h));
+            for (int y = 0; y < h; ++y)
+                for (int x = 0; x < w; ++x) {
+                    const Film& f = parts[std::size_t(y % 3)].films[k];
+                    const std::size_t i = std::size_t(y) * std::size_t(w) + std::size_t(x);
+                    for (std::size_t c = 0; c < 3; ++c) sums[3 * i + c] = f.sums()[3 * i + c];
+                    weights[i] = f.weights()[i];
+                    nonfinite[i] = f.nonfinite_counts()[i];
+                }
+            whole.films[k] = Film::from_accumulators(w, h, std::move(sums), std::move(weights), std::move(nonfinite));
+        }
+        const HybridImages sh = summarize_hybrid(std::move(whole));
+        CHECK(sh.low.image().rgb == ref.low.image().rgb);
+        CHECK(sh.high.image().rgb == ref.high.image().rgb);
+        CHECK(sh.da.image().rgb == ref.da.image().rgb);
+        CHECK(sh.switch_depth.rgb == ref.switch_depth.rgb);
+        CHECK(sh.var_total == ref.var_total);
+        CHECK(sh.var_total_se == ref.var_total_se);
+        CHECK(sh.counters.paths == ref.counters.paths);
+        CHECK(sh.counters.da == ref.counters.da);
+        CHECK_THROWS_WITH(summarize_hybrid(HybridFilms{}), Catch::Contains("films"));
+    }
     // A checkpoint of another render (other key) is refused with a message, not mixed in.
     opt.checkpoint.remove_when_done = false;
     (void)render_hybrid(s.ept, s.vpt, s.agg, ctx, cam, 2, 7, 1, opt);
