@@ -11,6 +11,12 @@
 //
 //   meng15_fig12_spices [--quality quick|full] [--out DIR] [--seed S] [--threads N]
 //                       [--width W] [--radius R] [--spp N] [--absorption A] [--exposure E]
+//                       [--equal-time-spp N] [--checkpoint SECONDS] [--resume]
+//
+// --checkpoint / --resume: one checkpoint per technique and heap in --out, and the equal-time
+// bundles per pixel beside them. mpirun -np K: rank r renders the rows y % K == r of every panel
+// (meng15_scenes.hpp render_hybrid_run). The equal-time inset rests on measured CPU times:
+// --equal-time-spp N pins it when images must be reproducible (1 vs K ranks, two runs).
 //
 // Outputs: fig12_spices.{exr,png} (EPT+VPT+DA), fig12_contrib_{ept,vpt,da}.{exr,png},
 // fig12_switch_depth.{exr,png}, fig12_equal_time_ept.{exr,png}, fig12_spices_ept{,_vpt}.{exr,png},

@@ -10,7 +10,13 @@
 // SANDCASTLE row. An equal-time EPT render is the inset.
 //
 //   meng15_fig1_sandcastle [--quality quick|full] [--out DIR] [--seed S] [--threads N]
-//                          [--width W] [--castle-size C] [--spp N] [--exposure E]
+//                          [--width W] [--castle-size C] [--spp N] [--exposure E] [--equal-time-spp N]
+//                          [--checkpoint SECONDS] [--resume]
+//
+// --checkpoint / --resume: one checkpoint per render in --out, and the equal-time bundles per pixel
+// beside them. mpirun -np K: rank r renders the rows y % K == r (meng15_scenes.hpp
+// render_hybrid_run). The equal-time inset rests on measured CPU times: --equal-time-spp N pins it
+// when images must be reproducible (1 vs K ranks, two runs).
 //
 // Outputs: fig1_sandcastle.{exr,png} (top EPT+VPT+DA | bottom EPT), fig1_sandcastle_{ept,ept_vpt_da}.{exr,png},
 // fig1_equal_time_ept.{exr,png}, fig1_switch_depth.exr, meng15_fig1_sandcastle.csv; JSON last.

@@ -15,7 +15,11 @@
 // is unbiased (b = 0). Points with n <= spp are measured, larger n follow from the same b^2, V, t.
 //
 //   meng15_fig7_glass_bead_cube [--quality quick|full] [--out DIR] [--seed S] [--threads N]
-//                               [--beads N] [--width W] [--spp N] [--exposure E]
+//                               [--beads N] [--width W] [--spp N] [--exposure E] [--checkpoint SECONDS] [--resume]
+//
+// --checkpoint / --resume: one checkpoint per technique's render in --out. mpirun -np K: rank r
+// renders the rows y % K == r (meng15_scenes.hpp render_hybrid_run); EXRs byte-identical to one
+// process's.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

@@ -1,6 +1,9 @@
-// meng15_scenes.hpp: the procedural stand-ins of Meng15's hybrid scenes shared by
-// meng15_table2_ttuv, meng15_fig12_spices and meng15_fig1_sandcastle: grains from the
-// procedural presets with their effective medium and diffusion, the lit ground scene, and
+// meng15_scenes.hpp: the procedural stand-ins of Meng15's hybrid scenes shared by the Meng15
+// scene examples (table2, fig1, fig7, fig11, fig12, fig13, hybrid_convergence): grains from the
+// procedural presets with their effective medium and diffusion (make_snow_grains: the snow of
+// fig11, fig13 and table2), the lit ground scene (make_lit_scene), the one render call every
+// example goes through (render_hybrid_run: this MPI rank's rows, one checkpoint per render, the
+// films shared by all ranks, then the summary), and
 // "panels" (one aggregate, its EPT and VPT scenes, context and camera each) rendered with the
 // hybrid and measured as one image. A scene of several aggregates of different grains (the
 // four spice heaps) is rendered as side-by-side panels, one aggregate per panel: render_hybrid

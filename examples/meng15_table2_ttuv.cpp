@@ -21,7 +21,7 @@
 //
 //   meng15_table2_ttuv [--quality quick|full] [--out DIR] [--seed S] [--threads N] [--scenes a,b]
 //                      [--spp N] [--width W] [--size R] [--castle-size C] [--absorption A] [--preview-stride K]
-//                      [--obj FILE] [--pa P] [--checkpoint SECONDS] [--resume]
+//                      [--obj FILE] [--pa P] [--max-events N] [--vpt-depth N] [--checkpoint SECONDS] [--resume]
 //
 // --checkpoint / --resume: one checkpoint per scene, technique and panel in --out, and the P_a the
 // timed previews chose beside them (a resumed run renders with the killed run's P_a); --pa pins
@@ -260,11 +260,16 @@ int main(int argc, char** argv) {
         const int level = ex.opt<int>("grain-level", 3, 4, "icosphere level of the snow grain mesh");
         const double exposure = ex.opt<double>("exposure", 0.0, "PNG exposure in stops");
         const std::string obj = ex.opt<std::string>("obj", "", "closed OBJ mesh for the scene 'obj' (scaled to --size grain radii tall)");
+        const int max_events = ex.opt<int>("max-events", 4096, "EPT events per path at most (grain-walk events count)");
+        const int vpt_depth = ex.opt<int>("vpt-depth", 4096, "VPT scattering + surface events per path at most");
         const auto pa_given = ex.opt_optional<double>(
             "pa", "pin P_a of the 'P_a opt' techniques to this value in (0, 1] (no preview; reproducible images)");
         ex.checkpointable();  // --checkpoint SECONDS / --resume: one checkpoint per scene, technique and panel
         ex.ready();
         meng15::quiet_other_ranks(ex);
+        if (max_events < 16 || max_events > (1 << 24))
+            throw cli_error("--max-events = " + ex.given_text("max-events") + " must be in [16, 16777216]");
+        if (vpt_depth < 16 || vpt_depth > (1 << 24)) throw cli_error("--vpt-depth = " + ex.given_text("vpt-depth") + " must be in [16, 16777216]");
         if (pa_given && !(*pa_given > 0.0 && *pa_given <= 1.0)) throw cli_error("--pa = " + ex.given_text("pa") + " must be in (0, 1]");
         if (spp < 8 || spp > 4096) throw cli_error("--spp must be in [8, 4096] (measuring.md: >= 8 batches)");
         if (width < 8 || width > 2048) throw cli_error("--width must be in [8, 2048]");
@@ -296,6 +301,8 @@ int main(int argc, char** argv) {
         rc.threads = ex.threads();
         rc.exposure = exposure;
         rc.pa_pinned = pa_given ? *pa_given : 0.0;
+        rc.max_events = max_events;
+        rc.vpt_depth = vpt_depth;
         const int height = std::max(6, width * 3 / 4);
 
         const meng15::Grains g = meng15::make_snow_grains(ex.seed(), ex.full(), absorption, level);
