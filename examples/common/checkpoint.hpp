@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <fstream>
 #include <filesystem>
 #include <functional>
@@ -85,7 +86,8 @@ std::vector<double> decided(const Example& ex, const std::string& stem, Decide&&
     const grainlight::CheckpointOptions c = checkpoint_from_cli(ex.cli(), ex.out() / (ex.name() + "." + safe + ".decision"));
     const std::uint64_t key = c.key ^ std::hash<std::string>{}(safe);
     std::vector<double> v;
-    if (ex.root()) {
+    std::string failure;  // rank 0's error: every rank must leave the broadcast and fail alike
+    if (ex.root()) try {
         bool loaded = false;
         if (!c.path.empty() && c.resume && std::filesystem::exists(c.path)) {
             std::ifstream in(c.path);
@@ -113,8 +115,13 @@ std::vector<double> decided(const Example& ex, const std::string& stem, Decide&&
                 write_text_atomic(c.path, text + "\n");
             }
         }
+    } catch (const std::exception& e) {
+        failure = e.what();
     }
+    v.insert(v.begin(), failure.empty() ? 0.0 : 1.0);  // status first
     ex.mpi().broadcast(v);
+    if (v.front() != 0.0) throw cli_error(failure.empty() ? "rank 0 failed to decide '" + safe + "' (its message above)" : failure);
+    v.erase(v.begin());
     if (!c.path.empty()) ex.track_checkpoint(c.path);
     return v;
 }
