@@ -120,6 +120,9 @@ std::vector<double> decided(const Example& ex, const std::string& stem, Decide&&
     }
     v.insert(v.begin(), failure.empty() ? 0.0 : 1.0);  // status first
     ex.mpi().broadcast(v);
+    // Under mpirun the harness aborts every rank while the exception unwinds, before its message is
+    // printed: rank 0 says why first.
+    if (v.front() != 0.0 && ex.root() && ex.ranks() > 1) std::fprintf(stderr, "%s: error: %s\n", ex.name().c_str(), failure.c_str());
     if (v.front() != 0.0) throw cli_error(failure.empty() ? "rank 0 failed to decide '" + safe + "' (its message above)" : failure);
     v.erase(v.begin());
     if (!c.path.empty()) ex.track_checkpoint(c.path);
