@@ -4,7 +4,9 @@
 // argument that changes the image (all but --out, --threads, --checkpoint, --resume), so a
 // checkpoint of another configuration is refused with a message instead of being mixed in.
 // Test hook: GRAINLIGHT_ABORT_AFTER_CHECKPOINTS=N ends the process right after the N-th write
-// (exit code 86), as a crash would; ctest uses it besides a real SIGKILL.
+// (exit code 86), as a crash would; ctest uses it besides a real SIGKILL. Choices a run takes from
+// its own timings (a preview's P_a, an equal-time sample count) go through `decided`: kept beside
+// the checkpoints for --resume, taken by rank 0 and sent to every MPI rank.
 #pragma once
 
 #include <cctype>

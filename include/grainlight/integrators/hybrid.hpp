@@ -41,7 +41,10 @@
 ///     the bundle estimates (total, low-order = EPT part, high-order = VPT/DA part) and the CPU
 ///     time of the two parts (the thread CPU time of each image row, split in the ratio of the
 ///     parts' steady-clock times inside the bundles); ttuv = (mean pixel variance of one bundle
-///     sample) x (CPU seconds of a one-bundle-per-pixel image).
+///     sample) x (CPU seconds of a one-bundle-per-pixel image). `render_hybrid` is
+///     `summarize_hybrid(render_hybrid_films(...))`: a process may render only its rows
+///     (HybridOptions::row_offset / row_stride), the films' rows are placed together and the
+///     summary is computed once, equal to a single process's (the examples' MPI split).
 ///
 /// Mode `HybridMode::ept` evaluates the same criterion but never switches: contributions after
 /// the would-be switch go to the high-order image, and every path is bit-identical to
