@@ -8,6 +8,8 @@
 // must agree within the statistical error (printed, and checked by a ctest entry).
 //
 //   embree_aggregate [--quality quick|full] [--out DIR] [--seed S] [--threads N] [--spp N]
+//                    [--checkpoint SECONDS] [--resume]
+//   mpirun -np K embree_aggregate ...       (built with MPI: rank r renders rows y % K == r)
 //
 // Writes embree_aggregate.{exr,png} (Embree render) and library_ept.{exr,png}; last line JSON.
 #include <embree3/rtcore.h>
@@ -19,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "common/checkpoint.hpp"
 #include "common/harness.hpp"
 #include "grainlight/adapters/embree.hpp"
 #include "grainlight/integrators/ept.hpp"
@@ -28,10 +31,6 @@
 #include "grainlight/scene/camera.hpp"
 #include "grainlight/scene/image_io.hpp"
 #include "grainlight/scene/scene.hpp"
-
-#if defined(_OPENMP)
-#include <omp.h>
-#endif
 
 namespace gl = grainlight;
 using namespace gl_examples;
@@ -187,6 +186,7 @@ int main(int argc, char** argv) {
                "A procedural aggregate as an Embree user geometry next to Embree meshes, rendered by EPT over Embree",
                "out/embree_aggregate", [&](Example& ex) {
         const auto spp = ex.opt<std::uint64_t>("spp", 16, 64, "samples per pixel");
+        ex.checkpointable();  // --checkpoint SECONDS / --resume (one checkpoint per render and rank)
         ex.ready();
         if (spp < 1 || spp > 65536) throw cli_error("--spp = " + std::to_string(spp) + " must be in [1, 65536]");
         const bool full = ex.full();
@@ -229,68 +229,62 @@ int main(int argc, char** argv) {
         gl::EptOptions opt;
         opt.max_events = full ? 4096 : 512;
 
-        // Embree render: this rank's rows (y % ranks == rank) over threads, one keyed generator per
-        // pixel sample, so any split over threads and MPI ranks gives the same image.
+        // Embree render through the library's row driver (render_rows): this rank's rows
+        // (y % ranks == rank) over threads, one keyed generator per pixel sample, checkpoints and
+        // resume; film 1 holds each row's tallies at pixel (0, y): sum of green, sum of its
+        // square, Embree traversals. Any split over threads and MPI ranks gives the same image.
         const int rank = ex.rank(), ranks = ex.ranks();
-        const int my_rows = (height - rank + ranks - 1) / ranks;
-        gl::Film local(width, height);
-        std::vector<double> row_sum(std::size_t(height), 0.0), row_sq(std::size_t(height), 0.0);
-        std::vector<std::uint64_t> row_rays(std::size_t(height), 0);
-        ProgressBar bar = ex.progress("embree", std::uint64_t(2 * my_rows));
+        ProgressBar bar = ex.progress("embree", std::uint64_t(2 * height));
         const auto t0 = std::chrono::steady_clock::now();
-#if defined(_OPENMP)
-        const int nt = threads > 0 ? threads : omp_get_max_threads();
-#pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
-#endif
-        for (int i = 0; i < my_rows; ++i) {
-            const int y = rank + i * ranks;
-            for (int x = 0; x < width; ++x) {
-                const std::uint64_t pixel = std::uint64_t(y) * std::uint64_t(width) + std::uint64_t(x);
-                for (std::uint64_t s = 0; s < spp; ++s) {
-                    gl::Rng rng = gl::Rng::from_key(seed, pixel, s);
-                    const gl::Vec2f u = rng.uniform2<float>();
-                    const auto ray = camera.generate_ray(float(x) + u.x, float(y) + u.y);
-                    gl::RGB L = embree_radiance(w, lib, agg, ray, rng, opt, row_rays[std::size_t(y)]);
-                    if (!L.is_finite()) {  // counted and reported, never poisoning the pixel
-                        local.add_nonfinite(x, y);
-                        L = gl::RGB(0.0f);
+        gl::RenderOptions eopt = render_options(ex, int(spp), "embree");
+        std::vector<gl::Film> films = gl::render_rows(
+            width, height, 2, eopt,
+            [&](int y, std::span<gl::Film> f) {
+                double sum_g = 0, sum_g2 = 0;
+                std::uint64_t rays = 0;
+                for (int x = 0; x < width; ++x) {
+                    const std::uint64_t pixel = std::uint64_t(y) * std::uint64_t(width) + std::uint64_t(x);
+                    for (std::uint64_t s = 0; s < spp; ++s) {
+                        gl::Rng rng = gl::Rng::from_key(seed, pixel, s);
+                        const gl::Vec2f u = rng.uniform2<float>();
+                        const auto ray = camera.generate_ray(float(x) + u.x, float(y) + u.y);
+                        gl::RGB L = embree_radiance(w, lib, agg, ray, rng, opt, rays);
+                        if (!L.is_finite()) {  // counted and reported, never poisoning the pixel
+                            f[0].add_nonfinite(x, y);
+                            L = gl::RGB(0.0f);
+                        }
+                        f[0].add_sample(x, y, L);
+                        sum_g += L[1];
+                        sum_g2 += double(L[1]) * L[1];
                     }
-                    local.add_sample(x, y, L);
-                    row_sum[std::size_t(y)] += L[1];
-                    row_sq[std::size_t(y)] += double(L[1]) * L[1];
                 }
-            }
-            bar.advance(1);
-        }
+                f[1].add_rgb(0, y, sum_g, sum_g2, double(rays));
+            },
+            [&](int n) { bar.advance(std::uint64_t(n)); });
         const double t_embree = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         // Library reference: render_ept on the same scene (its own scene layer + Algorithm 1), the
-        // same row share.
+        // same row share, its own checkpoint.
         const auto t1 = std::chrono::steady_clock::now();
-        gl::RenderOptions ropt;
-        ropt.spp = int(spp);
+        gl::RenderOptions ropt = render_options(ex, int(spp), "library");
         ropt.seed = seed + 1000003;
-        ropt.threads = threads;
-        ropt.row_offset = rank;
-        ropt.row_stride = ranks;
         gl::EptImages ref = gl::render_ept(lib, agg, camera, ropt, opt, [&](int n) { bar.advance(std::uint64_t(n)); });
         const double t_lib = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
         bar.done();
-        std::uint64_t local_rays = 0;  // this rank's traversals (its rays per second)
-        for (const auto r : row_rays) local_rays += r;
-        // Rank 0 assembles the rows (placements, in rank order) and the per-row tallies.
-        const gl::Film film = ex.mpi().gather_film_rows(local);
+        double local_rays = 0;  // this rank's traversals (its rays per second)
+        for (int y = rank; y < height; y += ranks) local_rays += films[1].sums()[3 * std::size_t(y) * std::size_t(width) + 2];
+        // Rank 0 assembles the rows (placements, in rank order).
+        const gl::Film film = ex.mpi().gather_film_rows(films[0]);
+        const gl::Film tallies = ex.mpi().gather_film_rows(films[1]);
         ref.low = ex.mpi().gather_film_rows(ref.low);
         ref.high = ex.mpi().gather_film_rows(ref.high);
-        row_sum = ex.mpi().sum_to_root(std::move(row_sum));
-        row_sq = ex.mpi().sum_to_root(std::move(row_sq));
-        const std::vector<double> rays_per_row =
-            ex.mpi().sum_to_root(std::vector<double>(row_rays.begin(), row_rays.end()));
         if (!ex.root()) return ex.finish({});
 
         double sum = 0, sq = 0;
         std::uint64_t rays = 0;
-        for (int y = 0; y < height; ++y)
-            sum += row_sum[std::size_t(y)], sq += row_sq[std::size_t(y)], rays += std::uint64_t(rays_per_row[std::size_t(y)]);
+        for (int y = 0; y < height; ++y) {
+            const double* t = tallies.sums().data() + 3 * std::size_t(y) * std::size_t(width);
+            sum += t[0], sq += t[1], rays += std::uint64_t(t[2]);
+        }
         const double n = double(width) * double(height) * double(spp);
         const double mean = sum / n, se = std::sqrt(std::max(0.0, sq / n - mean * mean) / n);
         const gl::Image img = film.image(), lib_img = ref.combined();
