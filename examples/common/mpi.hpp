@@ -137,22 +137,12 @@ public:
         for (int y = rank_; y < h; y += size_) append_row(local, y, mine);
         const auto all = gather_bytes(mine);
         if (!root()) return {};
-        const std::size_t n = std::size_t(w) * std::size_t(h);
-        std::vector<double> sums(3 * n), weights(n);
-        std::vector<std::uint32_t> nonfinite(n);
+        RowsIn in(w, h);
         for (int r = 0; r < size_; ++r) {
             const unsigned char* p = all[std::size_t(r)].data();
-            for (int y = r; y < h; y += size_) {
-                const std::size_t i0 = std::size_t(y) * std::size_t(w);
-                std::memcpy(sums.data() + 3 * i0, p, 3 * std::size_t(w) * sizeof(double));
-                p += 3 * std::size_t(w) * sizeof(double);
-                std::memcpy(weights.data() + i0, p, std::size_t(w) * sizeof(double));
-                p += std::size_t(w) * sizeof(double);
-                std::memcpy(nonfinite.data() + i0, p, std::size_t(w) * sizeof(std::uint32_t));
-                p += std::size_t(w) * sizeof(std::uint32_t);
-            }
+            for (int y = r; y < h; y += size_) in.read_row(y, p);
         }
-        return grainlight::Film::from_accumulators(w, h, std::move(sums), std::move(weights), std::move(nonfinite));
+        return in.film();
     }
 
     /// Element-wise sum of every rank's `values` on rank 0, added in rank order (elsewhere the
@@ -218,23 +208,35 @@ public:
             for (int y = 0; y < h; ++y) append_row(full, y, bytes);
         broadcast_bytes(bytes);
         if (root()) return full;
-        const std::size_t n = std::size_t(w) * std::size_t(h);
-        std::vector<double> sums(3 * n), weights(n);
-        std::vector<std::uint32_t> nonfinite(n);
+        RowsIn in(w, h);
         const unsigned char* p = bytes.data();
-        for (int y = 0; y < h; ++y) {
-            const std::size_t i0 = std::size_t(y) * std::size_t(w);
-            std::memcpy(sums.data() + 3 * i0, p, 3 * std::size_t(w) * sizeof(double));
-            p += 3 * std::size_t(w) * sizeof(double);
-            std::memcpy(weights.data() + i0, p, std::size_t(w) * sizeof(double));
-            p += std::size_t(w) * sizeof(double);
-            std::memcpy(nonfinite.data() + i0, p, std::size_t(w) * sizeof(std::uint32_t));
-            p += std::size_t(w) * sizeof(std::uint32_t);
-        }
-        return grainlight::Film::from_accumulators(w, h, std::move(sums), std::move(weights), std::move(nonfinite));
+        for (int y = 0; y < h; ++y) in.read_row(y, p);
+        return in.film();
     }
 
 private:
+    // A film's accumulators filled row by row from append_row's byte layout.
+    struct RowsIn {
+        int w, h;
+        std::vector<double> sums, weights;
+        std::vector<std::uint32_t> nonfinite;
+        RowsIn(int width, int height)
+            : w(width), h(height), sums(3 * std::size_t(width) * std::size_t(height)),
+              weights(std::size_t(width) * std::size_t(height)), nonfinite(std::size_t(width) * std::size_t(height)) {}
+        // Row y from p (3w sums, w weights, w non-finite counts); p moves past it.
+        void read_row(int y, const unsigned char*& p) {
+            const std::size_t i0 = std::size_t(y) * std::size_t(w), n = std::size_t(w);
+            std::memcpy(sums.data() + 3 * i0, p, 3 * n * sizeof(double));
+            p += 3 * n * sizeof(double);
+            std::memcpy(weights.data() + i0, p, n * sizeof(double));
+            p += n * sizeof(double);
+            std::memcpy(nonfinite.data() + i0, p, n * sizeof(std::uint32_t));
+            p += n * sizeof(std::uint32_t);
+        }
+        grainlight::Film film() {
+            return grainlight::Film::from_accumulators(w, h, std::move(sums), std::move(weights), std::move(nonfinite));
+        }
+    };
     static void append_row(const grainlight::Film& f, int y, std::vector<unsigned char>& out) {
         const std::size_t w = std::size_t(f.width()), i0 = std::size_t(y) * w;
         auto put = [&](const void* src, std::size_t bytes) {
