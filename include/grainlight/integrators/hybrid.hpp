@@ -810,6 +810,21 @@ struct HybridFilms {
     HybridMode mode = HybridMode::ept_vpt;  ///< the techniques of the render
 };
 
+namespace detail {
+/// The film slots of HybridFilms under the names render_hybrid_films and summarize_hybrid use.
+enum HybridFilmIndex : int {
+    f_low = HybridFilms::low,
+    f_high = HybridFilms::high,
+    f_da = HybridFilms::da,
+    f_var = HybridFilms::var,
+    f_m2_depth = HybridFilms::m2_depth,
+    f_seconds = HybridFilms::seconds,
+    f_count_a = HybridFilms::count_a,
+    f_count_b = HybridFilms::count_b,
+    n_films = HybridFilms::slots
+};
+}  // namespace detail
+
 /// Render with the hybrid integrator: every `stride`-th pixel in x and y (stride 1: the full
 /// image; the result then has ceil(w / stride) x ceil(h / stride) pixels, each the centre pixel
 /// of its block with the original footprint), `spp` bundles of opt.bundle_size paths per pixel.
@@ -844,17 +859,7 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
     // (var_total, var_low, var_high), (E[H^2], mean switch depth, 0); per row at pixel (0, y): (CPU
     // seconds low, high, 0) and the counters. Everything the summary below needs is in the films,
     // so a resumed render (checkpointed films) gives the same result as an uninterrupted one.
-    enum : int {
-        f_low = HybridFilms::low,
-        f_high = HybridFilms::high,
-        f_da = HybridFilms::da,
-        f_var = HybridFilms::var,
-        f_m2_depth = HybridFilms::m2_depth,
-        f_seconds = HybridFilms::seconds,
-        f_count_a = HybridFilms::count_a,
-        f_count_b = HybridFilms::count_b,
-        n_films = HybridFilms::slots
-    };
+    using enum detail::HybridFilmIndex;
     RenderOptions ro;
     ro.spp = spp;
     ro.seed = seed;
@@ -936,16 +941,7 @@ template <LitScene Scene, BoundaryShape Shape, class Distance, class Camera, cla
                    std::to_string(int(HybridFilms::slots)));
     std::vector<Film>& films = hf.films;
     const int w = films[0].width(), h = films[0].height();
-    enum : int {
-        f_low = HybridFilms::low,
-        f_high = HybridFilms::high,
-        f_da = HybridFilms::da,
-        f_var = HybridFilms::var,
-        f_m2_depth = HybridFilms::m2_depth,
-        f_seconds = HybridFilms::seconds,
-        f_count_a = HybridFilms::count_a,
-        f_count_b = HybridFilms::count_b
-    };
+    using enum detail::HybridFilmIndex;
     HybridImages img;
     img.switch_depth = Image(w, h);
     img.spp = hf.spp;
