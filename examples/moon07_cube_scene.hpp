@@ -581,6 +581,39 @@ struct ShellSceneOptions {
     }
 };
 
+/// The shell table of a scene of random glass spheres (Figs. 9, 11, 12): --shell-radii radii evenly
+/// from r_0 to r_max, the scene's grid (full 50 x 50 x 25, quick 24 x 16 x 16 cells, rank 5),
+/// sampled from the scene's own RSA packing (the medium's random process: ior 1.5, no absorption,
+/// paths cut at 20 R), cached in `out` as <file_prefix><parameters>.shel (saved when `save`, i.e.
+/// by MPI rank 0); one log line on stderr under `tag`.
+[[nodiscard]] inline CachedShellTable scene_shell_table(const ShellSceneOptions& so, const gl::PeriodicTile& rsa,
+                                                        double R, double r_max, bool full, const std::string& file_prefix,
+                                                        std::size_t n_spheres, double fraction, std::uint64_t seed,
+                                                        const std::filesystem::path& out, bool save,
+                                                        const std::string& tag) {
+    std::vector<double> radii(static_cast<std::size_t>(so.n_radii), 0.0);
+    const double r0 = so.shell_r0 * R;
+    for (int i = 0; i < so.n_radii; ++i) radii[std::size_t(i)] = r0 + (r_max - r0) * double(i) / double(so.n_radii - 1);
+    gl::ShellBuildOptions bo;
+    bo.n_c = full ? 50 : 24;
+    bo.n_u = full ? 50 : 16;
+    bo.n_v = full ? 25 : 16;
+    bo.rank = 5;
+    bo.cos_cells = so.cos_layout();
+    const std::string key = std::to_string(n_spheres) + "_" + std::to_string(int(fraction * 1000)) + "_" +
+                            std::to_string(so.shell_paths) + "_" + std::to_string(so.n_radii) + "_" +
+                            std::to_string(bo.n_c) + "x" + std::to_string(bo.n_u) + "x" + std::to_string(bo.n_v) +
+                            "_r" + std::to_string(int(so.shell_r0 * 100)) + "_s" + std::to_string(seed);
+    const std::filesystem::path table_path = out / (file_prefix + key + ".shel");
+    CachedShellTable ct = cached_shell_table(table_path, so.rebuild_table, bo, [&] {
+        const gl::SpherePackingShellSource src(rsa, 1.5, 0.0, 20 * R);
+        return gl::collect_shell_samples(src, radii, so.shell_paths, seed ^ 0x9u);
+    }, save);
+    std::cerr << tag << ": shell table " << (ct.cached ? "loaded" : "built") << " (" << ct.build_seconds
+              << " CPU s), " << ct.table.n_shells() << " radii " << radii.front() << ".." << radii.back()
+              << " R, raw " << ct.raw_bytes / 1024 << " KiB -> factored " << ct.factored_bytes / 1024 << " KiB\n";
+    return ct;
+}
 
 /// Per-pixel batch statistics of B renders.
 struct BatchImages {

@@ -92,32 +92,13 @@ int main(int argc, char** argv) {
         std::cerr << "moon07_fig11: " << kept.size() << " spheres in a cube of side " << L << " R (f = " << fraction
                   << ")\n";
 
-        // --- shell table from the same random process (cached) ---
-        std::vector<double> radii(static_cast<std::size_t>(so.n_radii), 0.0);
-        const double r0 = so.shell_r0 * R, r_max = 0.45 * L;
-        for (int i = 0; i < so.n_radii; ++i) radii[std::size_t(i)] = r0 + (r_max - r0) * double(i) / double(so.n_radii - 1);
-        gl::ShellBuildOptions bo;
-        bo.n_c = full ? 50 : 24;
-        bo.n_u = full ? 50 : 16;
-        bo.n_v = full ? 25 : 16;
-        bo.rank = 5;
-        bo.cos_cells = so.cos_layout();
-        const std::string key = std::to_string(n_spheres) + "_" + std::to_string(int(fraction * 1000)) + "_" +
-                                std::to_string(so.shell_paths) + "_" + std::to_string(so.n_radii) + "_" +
-                                std::to_string(bo.n_c) + "x" + std::to_string(bo.n_u) + "x" + std::to_string(bo.n_v) +
-                                "_r" + std::to_string(int(so.shell_r0 * 100)) + "_s" + std::to_string(seed);
-        const std::filesystem::path table_path = out / ("moon07_fig9_" + key + ".shel");
-        const CachedShellTable ct = cached_shell_table(table_path, so.rebuild_table, bo, [&] {
-            const gl::SpherePackingShellSource src(rsa, 1.5, 0.0, 20 * R);
-            return gl::collect_shell_samples(src, radii, so.shell_paths, seed ^ 0x9u);
-        }, ex.root());  // MPI: rank 0 saves the table
+        // --- shell table from the same random process (cached; scene_shell_table, moon07_cube_scene.hpp) ---
+        const CachedShellTable ct = scene_shell_table(so, rsa, R, 0.45 * L, full, "moon07_fig9_", n_spheres, fraction, seed,
+                                                      out, ex.root(), "moon07_fig11");  // MPI: rank 0 saves the table
         const gl::ShellTable& table = ct.table;
         const double build_seconds = ct.build_seconds, nmf_error = ct.nmf_error, raw_bytes = ct.raw_bytes,
                      factored_bytes = ct.factored_bytes;
         const bool cached = ct.cached;
-        std::cerr << "moon07_fig11: shell table " << (cached ? "loaded" : "built") << " (" << build_seconds
-                  << " CPU s), " << table.n_shells() << " radii " << radii.front() << ".." << radii.back()
-                  << " R, raw " << raw_bytes / 1024 << " KiB -> factored " << factored_bytes / 1024 << " KiB\n";
 
         const gl::ShellTracerOptions to = so.tracer_options(R);
         scene.hand_back = so.hand_back;
