@@ -654,6 +654,43 @@ struct ShellVsPt {
     double t_shells = 0, speedup = 0, ttuv_ratio = 0;  ///< CPU s of low + high; the two speed-ups
 };
 
+/// The comparison keys every Moon07 scene example's JSON line carries (issue 10: seconds_pt,
+/// seconds_low, seconds_high, rmse_pt, rmse_shells, speedup_equal_error, mean_pt, mean_shells;
+/// with the low / high split of the mean, the bias and its standard error, the ttuv ratio).
+inline void add_comparison_json(gl_examples::Json& j, const ShellVsPt& st, double seconds_pt, double seconds_low,
+                                double seconds_high) {
+    j.num("seconds_pt", seconds_pt)
+        .num("seconds_low", seconds_low)
+        .num("seconds_high", seconds_high)
+        .num("rmse_pt", st.rmse_pt)
+        .num("rmse_shells", st.rmse_sh)
+        .num("speedup_equal_error", st.speedup)
+        .num("mean_pt", st.mean_pt)
+        .num("mean_shells", st.mean_sh)
+        .num("mean_low", st.sum_lo / st.nm)
+        .num("mean_high", st.sum_hi / st.nm)
+        .num("bias_rel", st.bias_rel)
+        .num("exit_rule_bias", st.bias_rel)
+        .num("bias_rel_se", st.bias_rel_se)
+        .num("ttuv_ratio", st.ttuv_ratio);
+}
+/// The high-order pass's tracer statistics (fraction of samples switched to shells, shell steps
+/// per switched path, fraction leaving by the exit rule); `high_samples` = high-order samples
+/// over the mask.
+inline void add_tracer_json(gl_examples::Json& j, const gl::ShellTraceStats& ts, double high_samples) {
+    j.num("switched_fraction", double(ts.paths) / high_samples)
+        .num("shell_steps_per_switched_path", ts.paths ? double(ts.steps) / double(ts.paths) : 0.0)
+        .num("exit_fraction", ts.paths ? double(ts.exits) / double(ts.paths) : 0.0);
+}
+/// The shell table's keys (build or load CPU seconds, cached, NMF error, raw and factored bytes).
+inline void add_table_json(gl_examples::Json& j, const CachedShellTable& ct) {
+    j.num("shell_build_cpu_seconds", ct.build_seconds)
+        .boolean("shell_table_cached", ct.cached)
+        .num("nmf_error", ct.nmf_error)
+        .num("shell_raw_bytes", ct.raw_bytes)
+        .num("shell_factored_bytes", ct.factored_bytes);
+}
+
 inline ShellVsPt compare_shells_to_pt(const BatchImages& pt, const BatchImages& lo, const BatchImages& hi,
                                       const std::vector<char>& mask) {
     ShellVsPt r;

@@ -96,9 +96,7 @@ int main(int argc, char** argv) {
         const CachedShellTable ct = scene_shell_table(so, rsa, R, 0.45 * Rb, full, "moon07_fig12_bowl_", n_spheres, fraction, seed,
                                                       out, ex.root(), "moon07_fig12");  // MPI: rank 0 saves the table
         const gl::ShellTable& table = ct.table;
-        const double build_seconds = ct.build_seconds, nmf_error = ct.nmf_error, raw_bytes = ct.raw_bytes,
-                     factored_bytes = ct.factored_bytes;
-        const bool cached = ct.cached;
+        const double raw_bytes = ct.raw_bytes, factored_bytes = ct.factored_bytes;
 
         const gl::ShellTracerOptions to = so.tracer_options(R);
         scene.hand_back = so.hand_back;
@@ -127,8 +125,7 @@ int main(int argc, char** argv) {
         const ShellVsPt st = compare_shells_to_pt(pt, lo, hi, mask);
         const double mean_pt = st.mean_pt, mean_sh = st.mean_sh, sum_lo = st.sum_lo, sum_hi = st.sum_hi,
                      mse_sh_pixelwise = st.mse_sh_pixelwise, rmse_pt = st.rmse_pt, rmse_sh = st.rmse_sh,
-                     bias_rel = st.bias_rel, bias_rel_se = st.bias_rel_se, speedup = st.speedup,
-                     ttuv_ratio = st.ttuv_ratio, nm = st.nm;
+                     bias_rel = st.bias_rel, bias_rel_se = st.bias_rel_se, speedup = st.speedup, nm = st.nm;
 
         // --- outputs ---
         write_shell_images(out, "moon07_fig12", st, W, H);
@@ -153,30 +150,16 @@ int main(int argc, char** argv) {
                   << " KiB   paper: ~30 MB -> 250 KB\n";
         const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
         gl_examples::Json j = ex.summary();
-        j.num("seconds_pt", pt.cpu)
-            .num("seconds_low", lo.cpu)
-            .num("seconds_high", hi.cpu)
-            .num("rmse_pt", rmse_pt)
-            .num("rmse_shells", rmse_sh)
-            .num("speedup_equal_error", speedup)
-            .num("mean_pt", mean_pt)
-            .num("mean_shells", mean_sh)
-            .num("mean_low", sum_lo / nm)
-            .num("mean_high", sum_hi / nm)
-            .num("bias_rel", bias_rel)
-            .num("exit_rule_bias", bias_rel)
-            .num("bias_rel_se", bias_rel_se)
-            .num("ttuv_ratio", ttuv_ratio)
-            .num("rmse_shells_pixelwise", std::sqrt(mse_sh_pixelwise))
+        add_comparison_json(j, st, pt.cpu, lo.cpu, hi.cpu);
+        add_tracer_json(j, ts, high_samples);
+        add_table_json(j, ct);
+        j.num("rmse_shells_pixelwise", std::sqrt(mse_sh_pixelwise))
             .num("paper_speedup", 11.0)
             .num("paper_seconds_pt", 175 * 60.0)
             .num("paper_seconds_shells", 15.7 * 60.0)
             .num("paper_raw_bytes", 30e6)
             .num("paper_factored_bytes", 250e3)
             .num("table_albedo", table_albedo)
-            .num("switched_fraction", double(ts.paths) / high_samples)
-            .num("shell_steps_per_switched_path", ts.paths ? double(ts.steps) / double(ts.paths) : 0.0)
-            .num("exit_fraction", ts.paths ? double(ts.exits) / double(ts.paths) : 0.0)
             .boolean("cut_spheres", scene.cut)
             .boolean("exit_rule_table", to.exit_rule == gl::ShellExitRule::table)
             .boolean("hand_back", scene.hand_back)
@@ -188,11 +171,6 @@ int main(int argc, char** argv) {
             .integer("spheres", (long long)n_in)
             .num("bowl_radius_R", Rb)
             .integer("bowl_pixels", (long long)n_mask)
-            .num("shell_build_cpu_seconds", build_seconds)
-            .boolean("shell_table_cached", cached)
-            .num("nmf_error", nmf_error)
-            .num("shell_raw_bytes", raw_bytes)
-            .num("shell_factored_bytes", factored_bytes)
             .str("rank_rows", "rank r renders the rows y with y % ranks == r")
             .nums("rank_row_counts", ex.mpi().row_counts(H))
             .num("wall_seconds", wall);

@@ -331,10 +331,8 @@ int main(int argc, char** argv) {
             return gl::collect_shell_samples(src, radii, shell_paths, seed ^ 0x13u);
         }, ex.root());  // MPI: rank 0 saves the table
         const gl::ShellTable& table = ct.table;
-        const double build_seconds = ct.build_seconds, nmf_error = ct.nmf_error, raw_bytes = ct.raw_bytes,
-                     factored_bytes = ct.factored_bytes;
-        const bool cached = ct.cached;
-        std::cerr << "moon07_fig13: shell table " << (cached ? "loaded" : "built") << " (" << build_seconds << " CPU s), "
+        const double raw_bytes = ct.raw_bytes, factored_bytes = ct.factored_bytes;
+        std::cerr << "moon07_fig13: shell table " << (ct.cached ? "loaded" : "built") << " (" << ct.build_seconds << " CPU s), "
                   << table.n_shells() << " radii " << radii.front() << ".." << radii.back() << " R\n";
 
         gl::ShellTracerOptions to;
@@ -385,26 +383,12 @@ int main(int argc, char** argv) {
                   << " KiB   paper: ~30 MB -> 250 KB\n";
         const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
         gl_examples::Json j = ex.summary();
-        j.num("seconds_pt", pt.cpu)
-            .num("seconds_low", lo.cpu)
-            .num("seconds_high", hi.cpu)
-            .num("rmse_pt", st.rmse_pt)
-            .num("rmse_shells", st.rmse_sh)
-            .num("speedup_equal_error", st.speedup)
-            .num("mean_pt", st.mean_pt)
-            .num("mean_shells", st.mean_sh)
-            .num("mean_low", st.sum_lo / st.nm)
-            .num("mean_high", st.sum_hi / st.nm)
-            .num("bias_rel", st.bias_rel)
-            .num("exit_rule_bias", st.bias_rel)
-            .num("bias_rel_se", st.bias_rel_se)
-            .num("ttuv_ratio", st.ttuv_ratio)
-            .num("paper_raw_bytes", 30e6)
+        add_comparison_json(j, st, pt.cpu, lo.cpu, hi.cpu);
+        add_tracer_json(j, ts, high_samples);
+        add_table_json(j, ct);
+        j.num("paper_raw_bytes", 30e6)
             .num("paper_factored_bytes", 250e3)
             .num("table_albedo", table_albedo)
-            .num("switched_fraction", double(ts.paths) / high_samples)
-            .num("shell_steps_per_switched_path", ts.paths ? double(ts.steps) / double(ts.paths) : 0.0)
-            .num("exit_fraction", ts.paths ? double(ts.exits) / double(ts.paths) : 0.0)
             .boolean("continuation", scene.continuation)
             .integer("min_scatter", min_scatter)
             .num("switch_depth", switch_depth)
@@ -412,11 +396,6 @@ int main(int argc, char** argv) {
             .integer("exemplars", (long long)exemplars.size())
             .num("bowl_radius_R", Rb)
             .integer("bowl_pixels", (long long)n_mask)
-            .num("shell_build_cpu_seconds", build_seconds)
-            .boolean("shell_table_cached", cached)
-            .num("nmf_error", nmf_error)
-            .num("shell_raw_bytes", raw_bytes)
-            .num("shell_factored_bytes", factored_bytes)
             .str("rank_rows", "rank r renders the rows y with y % ranks == r")
             .nums("rank_row_counts", ex.mpi().row_counts(H))
             .num("wall_seconds", wall);
