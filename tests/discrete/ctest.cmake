@@ -1,33 +1,44 @@
 # Extra ctest entries for the discrete-media area (included from tests/CMakeLists.txt): quick runs of
 # the two Guo21 rendering examples with the issue's bounds, and bad-argument handling.
+
+# One example run checked by tests/common/check_json.cmake (the last JSON line against CHECKS, the
+# EXPECT_FILE written), optionally with a bad-argument run (BAD_ARGS) that must print BAD_REGEX;
+# both labelled "example;discrete".
+function(discrete_example_json_test)
+  cmake_parse_arguments(_t "" "NAME;TARGET;EXPECT_FILE;BAD_NAME;BAD_REGEX" "ARGS;CHECKS;BAD_ARGS" ${ARGN})
+  add_test(NAME ${_t_NAME}
+           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:${_t_TARGET}>
+                   "-DARGS=${_t_ARGS}"
+                   "-DCHECKS=${_t_CHECKS}"
+                   -DEXPECT_FILE=${_t_EXPECT_FILE}
+                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
+  if(_t_BAD_NAME)
+    add_test(NAME ${_t_BAD_NAME} COMMAND $<TARGET_FILE:${_t_TARGET}> ${_t_BAD_ARGS})
+    set_tests_properties(${_t_BAD_NAME} PROPERTIES PASS_REGULAR_EXPRESSION "${_t_BAD_REGEX}")
+  endif()
+  set_tests_properties(${_t_NAME} ${_t_BAD_NAME} PROPERTIES LABELS "example;discrete")
+endfunction()
+
 if(TARGET guo21_fig14_convergence)
   set(_g14out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig14_out)
   # Each discrete medium has its paired continuous medium's brightness (Guo21 Sec. 6.3) within 5 %
   # (measured <= 1 %), the per-pixel difference falls with N, and r_c >> r_p keeps the membership
   # rule's extinction factor near 1.
-  add_test(NAME guo21_fig14_convergence_json
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:guo21_fig14_convergence>
-                   "-DARGS=--quality;quick;--threads;2;--out;${_g14out}"
-                   "-DCHECKS=max_abs_rel_diff <= 0.05;rel_rmse_falls == 1;rel_rmse_last < 0.8 * rel_rmse_first;membership_factor < 1.02;query_radius_over_particle_radius >= 100;bytes_per_particle_max < 64"
-                   -DEXPECT_FILE=${_g14out}/guo21_fig14_convergence.csv
-                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
-  add_test(NAME guo21_fig14_convergence_bad_counts COMMAND $<TARGET_FILE:guo21_fig14_convergence> --counts 0 --out ${_g14out})
-  set_tests_properties(guo21_fig14_convergence_bad_counts PROPERTIES PASS_REGULAR_EXPRESSION "counts")
-  set_tests_properties(guo21_fig14_convergence_json guo21_fig14_convergence_bad_counts PROPERTIES LABELS "example;discrete")
+  discrete_example_json_test(NAME guo21_fig14_convergence_json TARGET guo21_fig14_convergence
+    ARGS "--quality;quick;--threads;2;--out;${_g14out}"
+    CHECKS "max_abs_rel_diff <= 0.05;rel_rmse_falls == 1;rel_rmse_last < 0.8 * rel_rmse_first;membership_factor < 1.02;query_radius_over_particle_radius >= 100;bytes_per_particle_max < 64"
+    EXPECT_FILE ${_g14out}/guo21_fig14_convergence.csv
+    BAD_NAME guo21_fig14_convergence_bad_counts BAD_REGEX "counts" BAD_ARGS --counts 0 --out ${_g14out})
 endif()
 if(TARGET guo21_fig12_cornell)
   set(_g12out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig12_out)
   # 1e5 spheres of 1000 um: ours -FD (ray optics, r_c = r_p / 20) agrees with EPT of explicit
   # dielectric spheres within 5 % in mean radiance (measured ~1 %); ours with diffraction within 10 %.
-  add_test(NAME guo21_fig12_cornell_json
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:guo21_fig12_cornell>
-                   "-DARGS=--quality;quick;--threads;2;--out;${_g12out}"
-                   "-DCHECKS=abs(rel_diff_no_diffraction) <= 0.05;abs(rel_diff_discrete) <= 0.10;rc_over_rp <= 0.1;count == 100000;memory_mb_discrete > 0;seconds_ept > 0"
-                   -DEXPECT_FILE=${_g12out}/ept.exr
-                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
-  add_test(NAME guo21_fig12_cornell_bad_rc COMMAND $<TARGET_FILE:guo21_fig12_cornell> --rc-over-rp -1 --out ${_g12out})
-  set_tests_properties(guo21_fig12_cornell_bad_rc PROPERTIES PASS_REGULAR_EXPRESSION "rc-over-rp")
-  set_tests_properties(guo21_fig12_cornell_json guo21_fig12_cornell_bad_rc PROPERTIES LABELS "example;discrete")
+  discrete_example_json_test(NAME guo21_fig12_cornell_json TARGET guo21_fig12_cornell
+    ARGS "--quality;quick;--threads;2;--out;${_g12out}"
+    CHECKS "abs(rel_diff_no_diffraction) <= 0.05;abs(rel_diff_discrete) <= 0.10;rc_over_rp <= 0.1;count == 100000;memory_mb_discrete > 0;seconds_ept > 0"
+    EXPECT_FILE ${_g12out}/ept.exr
+    BAD_NAME guo21_fig12_cornell_bad_rc BAD_REGEX "rc-over-rp" BAD_ARGS --rc-over-rp -1 --out ${_g12out})
 endif()
 if(TARGET guo21_fig17_grid_resolution)
   set(_g17out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig17_out)
@@ -35,27 +46,20 @@ if(TARGET guo21_fig17_grid_resolution)
   # fastest), the optimum is not at the fine end (> 0.2 per voxel), and one particle per voxel stays
   # within 1.6x of the fastest (measured 1.0-1.4x). Our valley from ~0.5 to 15 per voxel is flat
   # within the run-to-run noise of a shared machine, so the argmin itself is not checked (docs/guo21.md).
-  add_test(NAME guo21_fig17_grid_resolution_json
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:guo21_fig17_grid_resolution>
-                   "-DARGS=--quality;quick;--threads;2;--out;${_g17out}"
-                   "-DCHECKS=time_at_one_over_fastest <= 1.6;finest_over_fastest > 1.2;fastest_particles_per_voxel > 0.2"
-                   -DEXPECT_FILE=${_g17out}/guo21_fig17_grid_resolution.csv
-                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
-  add_test(NAME guo21_fig17_grid_resolution_bad_k COMMAND $<TARGET_FILE:guo21_fig17_grid_resolution> --k 0 --out ${_g17out})
-  set_tests_properties(guo21_fig17_grid_resolution_bad_k PROPERTIES PASS_REGULAR_EXPRESSION "--k")
-  set_tests_properties(guo21_fig17_grid_resolution_json guo21_fig17_grid_resolution_bad_k PROPERTIES LABELS "example;discrete")
+  discrete_example_json_test(NAME guo21_fig17_grid_resolution_json TARGET guo21_fig17_grid_resolution
+    ARGS "--quality;quick;--threads;2;--out;${_g17out}"
+    CHECKS "time_at_one_over_fastest <= 1.6;finest_over_fastest > 1.2;fastest_particles_per_voxel > 0.2"
+    EXPECT_FILE ${_g17out}/guo21_fig17_grid_resolution.csv
+    BAD_NAME guo21_fig17_grid_resolution_bad_k BAD_REGEX "--k" BAD_ARGS --k 0 --out ${_g17out})
 endif()
 if(TARGET guo21_fig12_cornell)
   # Spectral (8 wavelength bins, ice index of Warren & Brandt 2008, CIE 1931 -> sRGB): ours -FD
   # agrees with EPT in mean luminance within 5 %, ours within 10 % (as in the grey comparison).
   set(_g12sout ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig12_spectral_out)
-  add_test(NAME guo21_fig12_cornell_spectral_json
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:guo21_fig12_cornell>
-                   "-DARGS=--quality;quick;--threads;2;--spectral;1;--paper-k;0;--spp;64;--width;48;--out;${_g12sout}"
-                   "-DCHECKS=abs(rel_diff_no_diffraction_spectral) <= 0.05;abs(rel_diff_discrete_spectral) <= 0.10;spectral == 1"
-                   -DEXPECT_FILE=${_g12sout}/ours_spectral.exr
-                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
-  set_tests_properties(guo21_fig12_cornell_spectral_json PROPERTIES LABELS "example;discrete")
+  discrete_example_json_test(NAME guo21_fig12_cornell_spectral_json TARGET guo21_fig12_cornell
+    ARGS "--quality;quick;--threads;2;--spectral;1;--paper-k;0;--spp;64;--width;48;--out;${_g12sout}"
+    CHECKS "abs(rel_diff_no_diffraction_spectral) <= 0.05;abs(rel_diff_discrete_spectral) <= 0.10;spectral == 1"
+    EXPECT_FILE ${_g12sout}/ours_spectral.exr)
 endif()
 
 # Resumable renders (hardening issue): killed once its checkpoints exist, resumed byte-identical.
@@ -84,15 +88,11 @@ if(TARGET guo21_fig18_absorption)
   # membership rule's extinction factor 1.04 at r_c = 20 um), and that of the pair with each C_t
   # scaled by the factor (the rule's Poisson average) within 5 % (measured <= 1.9 %, seeds 1, 2).
   set(_g18out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig18_out)
-  add_test(NAME guo21_fig18_absorption_json
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:guo21_fig18_absorption>
-                   "-DARGS=--quality;quick;--threads;2;--out;${_g18out}"
-                   "-DCHECKS=albedo_falls == 1;mean_discrete_falls == 1;max_abs_rel_diff <= 0.08;max_abs_rel_diff_membership <= 0.05;mean_discrete_last_over_first < 0.5;count == 300000"
-                   -DEXPECT_FILE=${_g18out}/guo21_fig18_absorption.csv
-                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
-  add_test(NAME guo21_fig18_absorption_bad_eta COMMAND $<TARGET_FILE:guo21_fig18_absorption> --eta-i 0,-1e-4 --out ${_g18out})
-  set_tests_properties(guo21_fig18_absorption_bad_eta PROPERTIES PASS_REGULAR_EXPRESSION "eta-i")
-  set_tests_properties(guo21_fig18_absorption_json guo21_fig18_absorption_bad_eta PROPERTIES LABELS "example;discrete")
+  discrete_example_json_test(NAME guo21_fig18_absorption_json TARGET guo21_fig18_absorption
+    ARGS "--quality;quick;--threads;2;--out;${_g18out}"
+    CHECKS "albedo_falls == 1;mean_discrete_falls == 1;max_abs_rel_diff <= 0.08;max_abs_rel_diff_membership <= 0.05;mean_discrete_last_over_first < 0.5;count == 300000"
+    EXPECT_FILE ${_g18out}/guo21_fig18_absorption.csv
+    BAD_NAME guo21_fig18_absorption_bad_eta BAD_REGEX "eta-i" BAD_ARGS --eta-i 0,-1e-4 --out ${_g18out})
 endif()
 
 if(TARGET guo21_fig19_psd)
@@ -101,30 +101,22 @@ if(TARGET guo21_fig19_psd)
   # 10 % (measured <= 5.3 % at quick); the -FD ensemble g equals 2 g_bulk - 1 (large particles:
   # Q_ext = 2, half of it diffraction with g = 1) within 0.01 (measured 0.003).
   set(_g19out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig19_out)
-  add_test(NAME guo21_fig19_psd_json
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:guo21_fig19_psd>
-                   "-DARGS=--quality;quick;--threads;2;--out;${_g19out}"
-                   "-DCHECKS=mean_grows_with_rg == 1;max_abs_rel_diff_membership <= 0.10;max_abs_g_minus_no_diffraction_prediction <= 0.01"
-                   -DEXPECT_FILE=${_g19out}/guo21_fig19_psd.csv
-                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
-  add_test(NAME guo21_fig19_psd_bad_k COMMAND $<TARGET_FILE:guo21_fig19_psd> --k 0 --out ${_g19out})
-  set_tests_properties(guo21_fig19_psd_bad_k PROPERTIES PASS_REGULAR_EXPRESSION "--k")
-  set_tests_properties(guo21_fig19_psd_json guo21_fig19_psd_bad_k PROPERTIES LABELS "example;discrete")
+  discrete_example_json_test(NAME guo21_fig19_psd_json TARGET guo21_fig19_psd
+    ARGS "--quality;quick;--threads;2;--out;${_g19out}"
+    CHECKS "mean_grows_with_rg == 1;max_abs_rel_diff_membership <= 0.10;max_abs_g_minus_no_diffraction_prediction <= 0.01"
+    EXPECT_FILE ${_g19out}/guo21_fig19_psd.csv
+    BAD_NAME guo21_fig19_psd_bad_k BAD_REGEX "--k" BAD_ARGS --k 0 --out ${_g19out})
 endif()
 
 if(TARGET guo21_table1)
   # Guo21 Table 1 / Sec. 6.8: time and memory per (stand-in) scene, ours vs EPT at equal spp. Timings
   # are reported, never asserted; memory: cloud + grid below 64 bytes per particle (measured ~25).
   set(_gt1out ${CMAKE_CURRENT_BINARY_DIR}/guo21_table1_out)
-  add_test(NAME guo21_table1_json
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:guo21_table1>
-                   "-DARGS=--quality;quick;--threads;2;--out;${_gt1out}"
-                   "-DCHECKS=bytes_per_particle_max < 64"
-                   -DEXPECT_FILE=${_gt1out}/guo21_table1.csv
-                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
-  add_test(NAME guo21_table1_bad_spp COMMAND $<TARGET_FILE:guo21_table1> --spp 0 --out ${_gt1out})
-  set_tests_properties(guo21_table1_bad_spp PROPERTIES PASS_REGULAR_EXPRESSION "spp")
-  set_tests_properties(guo21_table1_json guo21_table1_bad_spp PROPERTIES LABELS "example;discrete")
+  discrete_example_json_test(NAME guo21_table1_json TARGET guo21_table1
+    ARGS "--quality;quick;--threads;2;--out;${_gt1out}"
+    CHECKS "bytes_per_particle_max < 64"
+    EXPECT_FILE ${_gt1out}/guo21_table1.csv
+    BAD_NAME guo21_table1_bad_spp BAD_REGEX "spp" BAD_ARGS --spp 0 --out ${_gt1out})
 endif()
 
 if(TARGET guo21_fig14_convergence)
@@ -135,13 +127,10 @@ if(TARGET guo21_fig14_convergence)
   # Monte Carlo + placement error at 96 spp is ~0.8 %), and the realized cloud's sum C_t / V equals
   # the number-weighted bulk sigma_t within 1 % (measured 0.2 %).
   set(_g14mout ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig14_mixture_out)
-  add_test(NAME guo21_fig14_mixture_dense_limit_json
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:guo21_fig14_convergence>
-                   "-DARGS=--quality;quick;--threads;2;--mixture;on;--counts;1e6;--spp;96;--out;${_g14mout}"
-                   "-DCHECKS=mixture == 1;share_species2 == 0.5;max_abs_rel_diff <= 0.03;max_abs_sigma_t_realized_over_bulk_minus_1 <= 0.01;membership_factor < 1.02"
-                   -DEXPECT_FILE=${_g14mout}/guo21_fig14_convergence.csv
-                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
-  set_tests_properties(guo21_fig14_mixture_dense_limit_json PROPERTIES LABELS "example;discrete")
+  discrete_example_json_test(NAME guo21_fig14_mixture_dense_limit_json TARGET guo21_fig14_convergence
+    ARGS "--quality;quick;--threads;2;--mixture;on;--counts;1e6;--spp;96;--out;${_g14mout}"
+    CHECKS "mixture == 1;share_species2 == 0.5;max_abs_rel_diff <= 0.03;max_abs_sigma_t_realized_over_bulk_minus_1 <= 0.01;membership_factor < 1.02"
+    EXPECT_FILE ${_g14mout}/guo21_fig14_convergence.csv)
 endif()
 
 if(TARGET guo21_fig5_mie_vs_goa)
@@ -151,15 +140,11 @@ if(TARGET guo21_fig5_mie_vs_goa)
   # the light, where GOA without edge rays is 2-3x below Mie even at 2 um; docs/guo21.md); the Mie
   # phase table integrates to 1 (its C_s from the series, the table from |S1|^2 + |S2|^2: 1e-4).
   set(_g5out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig5_out)
-  add_test(NAME guo21_fig5_mie_vs_goa_json
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:guo21_fig5_mie_vs_goa>
-                   "-DARGS=--quality;quick;--threads;2;--out;${_g5out}"
-                   "-DCHECKS=tv_shrinks == 1;tv_last < 0.8 * tv_first;abs_rel_diff_last < abs_rel_diff_first - 0.05;max_abs_phase_integral_mie_minus_1 < 0.003"
-                   -DEXPECT_FILE=${_g5out}/guo21_fig5_phase.csv
-                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
-  add_test(NAME guo21_fig5_mie_vs_goa_bad_radii COMMAND $<TARGET_FILE:guo21_fig5_mie_vs_goa> --radii 0 --out ${_g5out})
-  set_tests_properties(guo21_fig5_mie_vs_goa_bad_radii PROPERTIES PASS_REGULAR_EXPRESSION "radii")
-  set_tests_properties(guo21_fig5_mie_vs_goa_json guo21_fig5_mie_vs_goa_bad_radii PROPERTIES LABELS "example;discrete")
+  discrete_example_json_test(NAME guo21_fig5_mie_vs_goa_json TARGET guo21_fig5_mie_vs_goa
+    ARGS "--quality;quick;--threads;2;--out;${_g5out}"
+    CHECKS "tv_shrinks == 1;tv_last < 0.8 * tv_first;abs_rel_diff_last < abs_rel_diff_first - 0.05;max_abs_phase_integral_mie_minus_1 < 0.003"
+    EXPECT_FILE ${_g5out}/guo21_fig5_phase.csv
+    BAD_NAME guo21_fig5_mie_vs_goa_bad_radii BAD_REGEX "radii" BAD_ARGS --radii 0 --out ${_g5out})
 endif()
 
 if(TARGET guo21_fig13_hg_fit)
@@ -169,15 +154,11 @@ if(TARGET guo21_fig13_hg_fit)
   # the HG with the same g gives the mean radiance within 6 % (measured +2.3 +- 0.5 %); the
   # least-squares fit in ln p has a larger g (it follows the peak).
   set(_g13out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig13_out)
-  add_test(NAME guo21_fig13_hg_fit_json
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:guo21_fig13_hg_fit>
-                   "-DARGS=--quality;quick;--threads;2;--spp;256;--out;${_g13out}"
-                   "-DCHECKS=forward_peak_ratio_tab_over_hg > 1000;rainbow_138_ratio_tab_over_hg > 3;abs(rel_diff_hg_same_g) <= 0.06;g_hg_lsq > g_tabulated;abs(g_tabulated_phase_object - g_tabulated) < 1e-3"
-                   -DEXPECT_FILE=${_g13out}/guo21_fig13_phase.csv
-                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
-  add_test(NAME guo21_fig13_hg_fit_bad_spp COMMAND $<TARGET_FILE:guo21_fig13_hg_fit> --spp 0 --out ${_g13out})
-  set_tests_properties(guo21_fig13_hg_fit_bad_spp PROPERTIES PASS_REGULAR_EXPRESSION "spp")
-  set_tests_properties(guo21_fig13_hg_fit_json guo21_fig13_hg_fit_bad_spp PROPERTIES LABELS "example;discrete")
+  discrete_example_json_test(NAME guo21_fig13_hg_fit_json TARGET guo21_fig13_hg_fit
+    ARGS "--quality;quick;--threads;2;--spp;256;--out;${_g13out}"
+    CHECKS "forward_peak_ratio_tab_over_hg > 1000;rainbow_138_ratio_tab_over_hg > 3;abs(rel_diff_hg_same_g) <= 0.06;g_hg_lsq > g_tabulated;abs(g_tabulated_phase_object - g_tabulated) < 1e-3"
+    EXPECT_FILE ${_g13out}/guo21_fig13_phase.csv
+    BAD_NAME guo21_fig13_hg_fit_bad_spp BAD_REGEX "spp" BAD_ARGS --spp 0 --out ${_g13out})
 endif()
 
 if(TARGET guo21_fig16_query_radius)
@@ -187,15 +168,11 @@ if(TARGET guo21_fig16_query_radius)
   # the render is > 1.5x brighter than the unscaled continuous pair (measured 2.3x); the factor tends
   # to 1 as k grows (1.19 at k = 1) and the graininess falls with k (blurred glints).
   set(_g16out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig16_out)
-  add_test(NAME guo21_fig16_query_radius_json
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:guo21_fig16_query_radius>
-                   "-DARGS=--quality;quick;--threads;2;--out;${_g16out}"
-                   "-DCHECKS=max_abs_rel_diff <= 0.08;mean_first_over_continuous > 1.5;factor_first > 2;factor_last < 1.25;graininess_last < graininess_first"
-                   -DEXPECT_FILE=${_g16out}/guo21_fig16_query_radius.csv
-                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
-  add_test(NAME guo21_fig16_query_radius_bad_k COMMAND $<TARGET_FILE:guo21_fig16_query_radius> --k 0 --out ${_g16out})
-  set_tests_properties(guo21_fig16_query_radius_bad_k PROPERTIES PASS_REGULAR_EXPRESSION "--k")
-  set_tests_properties(guo21_fig16_query_radius_json guo21_fig16_query_radius_bad_k PROPERTIES LABELS "example;discrete")
+  discrete_example_json_test(NAME guo21_fig16_query_radius_json TARGET guo21_fig16_query_radius
+    ARGS "--quality;quick;--threads;2;--out;${_g16out}"
+    CHECKS "max_abs_rel_diff <= 0.08;mean_first_over_continuous > 1.5;factor_first > 2;factor_last < 1.25;graininess_last < graininess_first"
+    EXPECT_FILE ${_g16out}/guo21_fig16_query_radius.csv
+    BAD_NAME guo21_fig16_query_radius_bad_k BAD_REGEX "--k" BAD_ARGS --k 0 --out ${_g16out})
 endif()
 
 if(TARGET guo21_fig20_time_vs_n)
@@ -203,15 +180,11 @@ if(TARGET guo21_fig20_time_vs_n)
   # (ray optics) has EPT's mean radiance within 10 % (two renders of the same physics; measured
   # <= 2.1 %, standard errors 2-4 % at quick), and the cloud + grid stay below 64 bytes per particle.
   set(_g20out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig20_out)
-  add_test(NAME guo21_fig20_time_vs_n_json
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:guo21_fig20_time_vs_n>
-                   "-DARGS=--quality;quick;--threads;2;--out;${_g20out}"
-                   "-DCHECKS=max_abs_rel_diff_no_diffraction_n_le_1e5 <= 0.10;bytes_per_particle_max < 64;rc_over_rp <= 0.1"
-                   -DEXPECT_FILE=${_g20out}/guo21_fig20_time_vs_n.csv
-                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
-  add_test(NAME guo21_fig20_time_vs_n_bad_counts COMMAND $<TARGET_FILE:guo21_fig20_time_vs_n> --counts 0 --out ${_g20out})
-  set_tests_properties(guo21_fig20_time_vs_n_bad_counts PROPERTIES PASS_REGULAR_EXPRESSION "counts")
-  set_tests_properties(guo21_fig20_time_vs_n_json guo21_fig20_time_vs_n_bad_counts PROPERTIES LABELS "example;discrete")
+  discrete_example_json_test(NAME guo21_fig20_time_vs_n_json TARGET guo21_fig20_time_vs_n
+    ARGS "--quality;quick;--threads;2;--out;${_g20out}"
+    CHECKS "max_abs_rel_diff_no_diffraction_n_le_1e5 <= 0.10;bytes_per_particle_max < 64;rc_over_rp <= 0.1"
+    EXPECT_FILE ${_g20out}/guo21_fig20_time_vs_n.csv
+    BAD_NAME guo21_fig20_time_vs_n_bad_counts BAD_REGEX "counts" BAD_ARGS --counts 0 --out ${_g20out})
 endif()
 
 if(TARGET guo21_fig10_lamp)
@@ -223,15 +196,11 @@ if(TARGET guo21_fig10_lamp)
   # blocks only its geometric shadow, so ours / ours -FD follows the ratio of the membership factors
   # (0.50) within 10 % (measured 0.49).
   set(_g10out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig10_out)
-  add_test(NAME guo21_fig10_lamp_json
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:guo21_fig10_lamp>
-                   "-DARGS=--quality;quick;--threads;2;--out;${_g10out}"
-                   "-DCHECKS=abs(rel_diff_no_diffraction_last) <= 3 * rel_diff_no_diffraction_se_last + 0.03;max_z_no_diffraction <= 4;abs(ours_over_no_diffraction_last / predicted_ours_over_no_diffraction_last - 1) <= 0.10;membership_factor_max < 1.1;bytes_per_particle_max < 64"
-                   -DEXPECT_FILE=${_g10out}/guo21_fig10_lamp.csv
-                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
-  add_test(NAME guo21_fig10_lamp_bad_count COMMAND $<TARGET_FILE:guo21_fig10_lamp> --count 0 --out ${_g10out})
-  set_tests_properties(guo21_fig10_lamp_bad_count PROPERTIES PASS_REGULAR_EXPRESSION "count")
-  set_tests_properties(guo21_fig10_lamp_json guo21_fig10_lamp_bad_count PROPERTIES LABELS "example;discrete")
+  discrete_example_json_test(NAME guo21_fig10_lamp_json TARGET guo21_fig10_lamp
+    ARGS "--quality;quick;--threads;2;--out;${_g10out}"
+    CHECKS "abs(rel_diff_no_diffraction_last) <= 3 * rel_diff_no_diffraction_se_last + 0.03;max_z_no_diffraction <= 4;abs(ours_over_no_diffraction_last / predicted_ours_over_no_diffraction_last - 1) <= 0.10;membership_factor_max < 1.1;bytes_per_particle_max < 64"
+    EXPECT_FILE ${_g10out}/guo21_fig10_lamp.csv
+    BAD_NAME guo21_fig10_lamp_bad_count BAD_REGEX "count" BAD_ARGS --count 0 --out ${_g10out})
 endif()
 
 # MPI scale-out (issue 14 item 2): a Guo21 render split by rows over 2 ranks and gathered gives the
