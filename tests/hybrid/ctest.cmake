@@ -1,70 +1,90 @@
 # Extra ctest entries for the hybrid area (included from tests/CMakeLists.txt): a tiny run of the
 # Meng15 hybrid example (small sphere of grains) reports its speedups; bad arguments exit with 2;
 # meng15_table2_ttuv at quick prints Table 2's JSON shape with finite numbers.
+
+# One example run (LABELS "example;hybrid", TIMEOUT 600) whose last JSON line is checked against
+# CHECKS: per scene (SCENES, KEYS; CHECKER defaults to tests/hybrid/check_scenes_json.cmake) or flat
+# (tests/common/check_json.cmake, with the file EXPECT_FILE when given).
+function(hybrid_example_json_test)
+  cmake_parse_arguments(_t "" "NAME;TARGET;EXPECT_FILE;CHECKER" "ARGS;SCENES;KEYS;CHECKS" ${ARGN})
+  if(_t_SCENES)
+    if(NOT _t_CHECKER)
+      set(_t_CHECKER ${PROJECT_SOURCE_DIR}/tests/hybrid/check_scenes_json.cmake)
+    endif()
+    add_test(NAME ${_t_NAME}
+             COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:${_t_TARGET}>
+                     "-DARGS=${_t_ARGS}" "-DSCENES=${_t_SCENES}" "-DKEYS=${_t_KEYS}" "-DCHECKS=${_t_CHECKS}"
+                     -P ${_t_CHECKER})
+  elseif(_t_EXPECT_FILE)
+    add_test(NAME ${_t_NAME}
+             COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:${_t_TARGET}>
+                     "-DARGS=${_t_ARGS}" "-DCHECKS=${_t_CHECKS}" -DEXPECT_FILE=${_t_EXPECT_FILE}
+                     -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
+  else()
+    add_test(NAME ${_t_NAME}
+             COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:${_t_TARGET}>
+                     "-DARGS=${_t_ARGS}" "-DCHECKS=${_t_CHECKS}"
+                     -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
+  endif()
+  set_tests_properties(${_t_NAME} PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
+endfunction()
+# A run of TARGET with bad arguments (ARGN) that must exit non-zero.
+function(hybrid_bad_argument_test name target)
+  add_test(NAME ${name} COMMAND $<TARGET_FILE:${target}> ${ARGN})
+  set_tests_properties(${name} PROPERTIES WILL_FAIL TRUE LABELS "example;hybrid")
+endfunction()
+
 if(TARGET meng15_hybrid_convergence OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/meng15_hybrid_convergence.cpp))
   add_test(NAME meng15_hybrid_tiny
            COMMAND $<TARGET_FILE:meng15_hybrid_convergence> --spp 2 --radius 10 --width 32 --threads 2
                    --out ${CMAKE_CURRENT_BINARY_DIR}/meng15_hybrid_tiny)
   set_tests_properties(meng15_hybrid_tiny PROPERTIES PASS_REGULAR_EXPRESSION "\"ept_vpt_pa_1_speedup\":[0-9.e+-]+,"
                        LABELS "example;hybrid")
-  add_test(NAME meng15_hybrid_bad_spp COMMAND $<TARGET_FILE:meng15_hybrid_convergence> --spp 1)
-  set_tests_properties(meng15_hybrid_bad_spp PROPERTIES WILL_FAIL TRUE LABELS "example;hybrid")
+  hybrid_bad_argument_test(meng15_hybrid_bad_spp meng15_hybrid_convergence --spp 1)
 endif()
 if(TARGET meng15_table2_ttuv OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/meng15_table2_ttuv.cpp))
   # Quick quality (the main job's run, ~2 min on 2 cores: snow_sphere, snowman_1m and the four spice
   # heaps): every scene has the ten keys as finite
   # numbers, speedups > 0, |bias of VPT| < 0.15 and |bias of DA| < 0.3 (generous sanity bounds).
-  add_test(NAME meng15_table2_ttuv_quick
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:meng15_table2_ttuv>
-                   "-DARGS=--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_table2_ttuv"
-                   "-DSCENES=snow_sphere;snowman_1m;spices"
-                   "-DKEYS=ept_vpt_speedup;ept_vpt_speedup_high_order;ept_vpt_pa_opt_speedup;ept_vpt_da_speedup;ept_vpt_da_speedup_high_order;ept_vpt_da_pa_opt_speedup;bias_ept_vpt;bias_ept_vpt_stderr;bias_ept_vpt_da;bias_ept_vpt_da_stderr"
-                   "-DCHECKS=ept_vpt_speedup > 0;ept_vpt_da_speedup > 0;ept_vpt_pa_opt_speedup > 0;ept_vpt_da_pa_opt_speedup > 0;ept_vpt_speedup_high_order > 0;ept_vpt_da_speedup_high_order > 0;abs(bias_ept_vpt) < 0.15;abs(bias_ept_vpt_da) < 0.3;bias_ept_vpt_stderr > 0;bias_ept_vpt_da_stderr > 0"
-                   -P ${PROJECT_SOURCE_DIR}/tests/hybrid/check_scenes_json.cmake)
-  set_tests_properties(meng15_table2_ttuv_quick PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
+  hybrid_example_json_test(NAME meng15_table2_ttuv_quick TARGET meng15_table2_ttuv
+    ARGS "--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_table2_ttuv"
+    SCENES "snow_sphere;snowman_1m;spices"
+    KEYS "ept_vpt_speedup;ept_vpt_speedup_high_order;ept_vpt_pa_opt_speedup;ept_vpt_da_speedup;ept_vpt_da_speedup_high_order;ept_vpt_da_pa_opt_speedup;bias_ept_vpt;bias_ept_vpt_stderr;bias_ept_vpt_da;bias_ept_vpt_da_stderr"
+    CHECKS "ept_vpt_speedup > 0;ept_vpt_da_speedup > 0;ept_vpt_pa_opt_speedup > 0;ept_vpt_da_pa_opt_speedup > 0;ept_vpt_speedup_high_order > 0;ept_vpt_da_speedup_high_order > 0;abs(bias_ept_vpt) < 0.15;abs(bias_ept_vpt_da) < 0.3;bias_ept_vpt_stderr > 0;bias_ept_vpt_da_stderr > 0"
+    CHECKER ${PROJECT_SOURCE_DIR}/tests/hybrid/check_scenes_json.cmake)
   # A user OBJ as the aggregate boundary (tests/data/blob_snow_grain.obj: a procedural blob) with
   # the DA switch through its MeshDistance, 40 grain radii tall.
-  add_test(NAME meng15_table2_ttuv_obj
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:meng15_table2_ttuv>
-                   "-DARGS=--scenes;obj;--obj;${PROJECT_SOURCE_DIR}/tests/data/blob_snow_grain.obj;--size;40;--width;32;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_table2_ttuv_obj"
-                   "-DSCENES=obj"
-                   "-DKEYS=ept_vpt_speedup;ept_vpt_speedup_high_order;ept_vpt_da_speedup;ept_vpt_da_speedup_high_order;bias_ept_vpt;bias_ept_vpt_stderr;bias_ept_vpt_da;bias_ept_vpt_da_stderr"
-                   "-DCHECKS=ept_vpt_speedup > 1;ept_vpt_da_speedup > 1;abs(bias_ept_vpt) < 0.25;abs(bias_ept_vpt_da) < 0.35"
-                   -P ${PROJECT_SOURCE_DIR}/tests/hybrid/check_scenes_json.cmake)
-  set_tests_properties(meng15_table2_ttuv_obj PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
+  hybrid_example_json_test(NAME meng15_table2_ttuv_obj TARGET meng15_table2_ttuv
+    ARGS "--scenes;obj;--obj;${PROJECT_SOURCE_DIR}/tests/data/blob_snow_grain.obj;--size;40;--width;32;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_table2_ttuv_obj"
+    SCENES "obj"
+    KEYS "ept_vpt_speedup;ept_vpt_speedup_high_order;ept_vpt_da_speedup;ept_vpt_da_speedup_high_order;bias_ept_vpt;bias_ept_vpt_stderr;bias_ept_vpt_da;bias_ept_vpt_da_stderr"
+    CHECKS "ept_vpt_speedup > 1;ept_vpt_da_speedup > 1;abs(bias_ept_vpt) < 0.25;abs(bias_ept_vpt_da) < 0.35"
+    CHECKER ${PROJECT_SOURCE_DIR}/tests/hybrid/check_scenes_json.cmake)
   # Fig. 1's sandcastle stand-in (heightfield CSG mesh of sand grains), small: the keys are finite and
   # the biases within sanity bounds; sand grains absorb (albedo 0.68), so the high order is a small
   # share and the paper's total speed-ups are only 2.1-2.2x: require > 0.5 (not a loss beyond noise).
-  add_test(NAME meng15_table2_ttuv_sandcastle
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:meng15_table2_ttuv>
-                   "-DARGS=--scenes;sandcastle;--castle-size;40;--width;32;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_table2_ttuv_castle"
-                   "-DSCENES=sandcastle"
-                   "-DKEYS=ept_vpt_speedup;ept_vpt_speedup_high_order;ept_vpt_pa_opt_speedup;ept_vpt_da_speedup;ept_vpt_da_speedup_high_order;ept_vpt_da_pa_opt_speedup;bias_ept_vpt;bias_ept_vpt_stderr;bias_ept_vpt_da;bias_ept_vpt_da_stderr"
-                   "-DCHECKS=ept_vpt_speedup > 0.5;ept_vpt_da_speedup > 0.5;ept_vpt_pa_opt_speedup > 0.5;abs(bias_ept_vpt) < 0.15;abs(bias_ept_vpt_da) < 0.3;bias_ept_vpt_stderr > 0"
-                   -P ${PROJECT_SOURCE_DIR}/tests/hybrid/check_scenes_json.cmake)
-  set_tests_properties(meng15_table2_ttuv_sandcastle PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
+  hybrid_example_json_test(NAME meng15_table2_ttuv_sandcastle TARGET meng15_table2_ttuv
+    ARGS "--scenes;sandcastle;--castle-size;40;--width;32;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_table2_ttuv_castle"
+    SCENES "sandcastle"
+    KEYS "ept_vpt_speedup;ept_vpt_speedup_high_order;ept_vpt_pa_opt_speedup;ept_vpt_da_speedup;ept_vpt_da_speedup_high_order;ept_vpt_da_pa_opt_speedup;bias_ept_vpt;bias_ept_vpt_stderr;bias_ept_vpt_da;bias_ept_vpt_da_stderr"
+    CHECKS "ept_vpt_speedup > 0.5;ept_vpt_da_speedup > 0.5;ept_vpt_pa_opt_speedup > 0.5;abs(bias_ept_vpt) < 0.15;abs(bias_ept_vpt_da) < 0.3;bias_ept_vpt_stderr > 0"
+    CHECKER ${PROJECT_SOURCE_DIR}/tests/hybrid/check_scenes_json.cmake)
   # Fig. 7's glass-bead cube (Moon07 Fig. 9) as a Table 2 scene, small (48 px, ~4 CPU s): the keys are
   # finite; on lossless beads EPT+VPT beats EPT (measured 11x; bound 1).
-  add_test(NAME meng15_table2_ttuv_glass_bead_cube
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:meng15_table2_ttuv>
-                   "-DARGS=--scenes;glass_bead_cube;--width;48;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_table2_ttuv_cube"
-                   "-DSCENES=glass_bead_cube"
-                   "-DKEYS=ept_vpt_speedup;ept_vpt_speedup_high_order;ept_vpt_pa_opt_speedup;ept_vpt_da_speedup;ept_vpt_da_speedup_high_order;ept_vpt_da_pa_opt_speedup;bias_ept_vpt;bias_ept_vpt_stderr;bias_ept_vpt_da;bias_ept_vpt_da_stderr"
-                   "-DCHECKS=ept_vpt_speedup > 1;ept_vpt_da_speedup > 0;abs(bias_ept_vpt) < 0.1;abs(bias_ept_vpt_da) < 0.2;bias_ept_vpt_stderr > 0"
-                   -P ${PROJECT_SOURCE_DIR}/tests/hybrid/check_scenes_json.cmake)
-  set_tests_properties(meng15_table2_ttuv_glass_bead_cube PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
-  add_test(NAME meng15_table2_ttuv_bad_scene COMMAND $<TARGET_FILE:meng15_table2_ttuv> --scenes castle)
-  set_tests_properties(meng15_table2_ttuv_bad_scene PROPERTIES WILL_FAIL TRUE LABELS "example;hybrid")
+  hybrid_example_json_test(NAME meng15_table2_ttuv_glass_bead_cube TARGET meng15_table2_ttuv
+    ARGS "--scenes;glass_bead_cube;--width;48;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_table2_ttuv_cube"
+    SCENES "glass_bead_cube"
+    KEYS "ept_vpt_speedup;ept_vpt_speedup_high_order;ept_vpt_pa_opt_speedup;ept_vpt_da_speedup;ept_vpt_da_speedup_high_order;ept_vpt_da_pa_opt_speedup;bias_ept_vpt;bias_ept_vpt_stderr;bias_ept_vpt_da;bias_ept_vpt_da_stderr"
+    CHECKS "ept_vpt_speedup > 1;ept_vpt_da_speedup > 0;abs(bias_ept_vpt) < 0.1;abs(bias_ept_vpt_da) < 0.2;bias_ept_vpt_stderr > 0"
+    CHECKER ${PROJECT_SOURCE_DIR}/tests/hybrid/check_scenes_json.cmake)
+  hybrid_bad_argument_test(meng15_table2_ttuv_bad_scene meng15_table2_ttuv --scenes castle)
 endif()
 if(TARGET meng15_fig11_snow_sphere OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/meng15_fig11_snow_sphere.cpp))
   # Fig. 11 at quick: a few EPT bounces before VPT recover the grain-scale detail VPT alone misses
   # (RMS difference to EPT beyond noise: measured 60 % for VPT, 0 for EPT+VPT), means within 15 %.
-  add_test(NAME meng15_fig11_snow_sphere_quick
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:meng15_fig11_snow_sphere>
-                   "-DARGS=--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_fig11_snow_sphere"
-                   "-DCHECKS=vpt_detail_rms > ept_vpt_detail_rms + 0.1;vpt_da_detail_rms > ept_vpt_da_detail_rms + 0.1;abs(ept_vpt_rel_diff) < 0.15;abs(vpt_rel_diff) < 0.15;abs(ept_vpt_da_rel_diff) < 0.3;ept_vpt_speedup > 1"
-                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
-  set_tests_properties(meng15_fig11_snow_sphere_quick PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
+  hybrid_example_json_test(NAME meng15_fig11_snow_sphere_quick TARGET meng15_fig11_snow_sphere
+    ARGS "--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_fig11_snow_sphere"
+    CHECKS "vpt_detail_rms > ept_vpt_detail_rms + 0.1;vpt_da_detail_rms > ept_vpt_da_detail_rms + 0.1;abs(ept_vpt_rel_diff) < 0.15;abs(vpt_rel_diff) < 0.15;abs(ept_vpt_da_rel_diff) < 0.3;ept_vpt_speedup > 1")
 endif()
 if(TARGET meng15_fig13_snowman OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/meng15_fig13_snowman.cpp))
   # Fig. 13 at quick (equal CPU time per technique): both scales have the keys as finite numbers, the
@@ -76,16 +96,13 @@ if(TARGET meng15_fig13_snowman OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJEC
   file(READ ${PROJECT_SOURCE_DIR}/tests/hybrid/check_scenes_json.cmake _m15_checker)
   string(REPLACE "scenes" "scales" _m15_checker "${_m15_checker}")
   file(WRITE ${CMAKE_CURRENT_BINARY_DIR}/check_scales_json.cmake "${_m15_checker}")
-  add_test(NAME meng15_fig13_snowman_quick
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:meng15_fig13_snowman>
-                   "-DARGS=--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_fig13_snowman"
-                   "-DSCENES=snowman_1m;snowman_10cm"
-                   "-DKEYS=seconds_ept;seconds_ept_vpt;seconds_ept_vpt_da;mean_ept;mean_ept_vpt;mean_ept_vpt_da;ttuv_speedup_ept_vpt;ttuv_speedup_ept_vpt_da"
-                   "-DCHECKS=seconds_ept > 0;seconds_ept_vpt > 0;seconds_ept_vpt_da > 0;mean_ept > 0;ttuv_speedup_ept_vpt > 0;ttuv_speedup_ept_vpt_da > 0;abs(mean_ept_vpt / mean_ept - 1) < 0.1;abs(mean_ept_vpt_da / mean_ept - 1) < 0.2;abs(mean_ept_vpt_da / mean_ept_vpt - 1) < 0.2"
-                   -P ${CMAKE_CURRENT_BINARY_DIR}/check_scales_json.cmake)
-  set_tests_properties(meng15_fig13_snowman_quick PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
-  add_test(NAME meng15_fig13_snowman_bad_budget COMMAND $<TARGET_FILE:meng15_fig13_snowman> --budget 0)
-  set_tests_properties(meng15_fig13_snowman_bad_budget PROPERTIES WILL_FAIL TRUE LABELS "example;hybrid")
+  hybrid_example_json_test(NAME meng15_fig13_snowman_quick TARGET meng15_fig13_snowman
+    ARGS "--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_fig13_snowman"
+    SCENES "snowman_1m;snowman_10cm"
+    KEYS "seconds_ept;seconds_ept_vpt;seconds_ept_vpt_da;mean_ept;mean_ept_vpt;mean_ept_vpt_da;ttuv_speedup_ept_vpt;ttuv_speedup_ept_vpt_da"
+    CHECKS "seconds_ept > 0;seconds_ept_vpt > 0;seconds_ept_vpt_da > 0;mean_ept > 0;ttuv_speedup_ept_vpt > 0;ttuv_speedup_ept_vpt_da > 0;abs(mean_ept_vpt / mean_ept - 1) < 0.1;abs(mean_ept_vpt_da / mean_ept - 1) < 0.2;abs(mean_ept_vpt_da / mean_ept_vpt - 1) < 0.2"
+    CHECKER ${CMAKE_CURRENT_BINARY_DIR}/check_scales_json.cmake)
+  hybrid_bad_argument_test(meng15_fig13_snowman_bad_budget meng15_fig13_snowman --budget 0)
 endif()
 
 # Resumable hybrid renders (hardening issue): killed with SIGKILL once checkpoints exist, then
@@ -105,15 +122,11 @@ if(TARGET meng15_fig12_spices OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT
   # summing to 1 by construction); every switched path had at least min_ept_interactions = 1 grain
   # interaction in EPT first (Sec. 6), so the mean switch depth is >= 1; DA fires (d_DA of flour 1.4,
   # brown sugar 2.2 grain radii: the heaps' interiors are deep enough).
-  add_test(NAME meng15_fig12_spices_quick
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:meng15_fig12_spices>
-                   "-DARGS=--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_fig12_spices"
-                   "-DCHECKS=ept_vpt_speedup > 0;ept_vpt_da_speedup > 0;ept_vpt_speedup_high_order > 0;abs(bias_ept_vpt) < 0.15;abs(bias_ept_vpt_da) < 0.3;bias_ept_vpt_stderr > 0;share_ept > 0;share_vpt > 0;share_da > 0;abs(share_ept + share_vpt + share_da - 1) < 1e-4;switch_depth >= 1;da_per_path > 0;equal_time_ept_spp >= 1;equal_time_variance_ratio > 0"
-                   -DEXPECT_FILE=${CMAKE_CURRENT_BINARY_DIR}/meng15_fig12_spices/fig12_switch_depth.exr
-                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
-  set_tests_properties(meng15_fig12_spices_quick PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
-  add_test(NAME meng15_fig12_spices_bad_radius COMMAND $<TARGET_FILE:meng15_fig12_spices> --radius 0)
-  set_tests_properties(meng15_fig12_spices_bad_radius PROPERTIES WILL_FAIL TRUE LABELS "example;hybrid")
+  hybrid_example_json_test(NAME meng15_fig12_spices_quick TARGET meng15_fig12_spices
+    ARGS "--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_fig12_spices"
+    CHECKS "ept_vpt_speedup > 0;ept_vpt_da_speedup > 0;ept_vpt_speedup_high_order > 0;abs(bias_ept_vpt) < 0.15;abs(bias_ept_vpt_da) < 0.3;bias_ept_vpt_stderr > 0;share_ept > 0;share_vpt > 0;share_da > 0;abs(share_ept + share_vpt + share_da - 1) < 1e-4;switch_depth >= 1;da_per_path > 0;equal_time_ept_spp >= 1;equal_time_variance_ratio > 0"
+    EXPECT_FILE ${CMAKE_CURRENT_BINARY_DIR}/meng15_fig12_spices/fig12_switch_depth.exr)
+  hybrid_bad_argument_test(meng15_fig12_spices_bad_radius meng15_fig12_spices --radius 0)
 endif()
 if(TARGET meng15_fig1_sandcastle OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/meng15_fig1_sandcastle.cpp))
   # Fig. 1 at quick (castle 60 grain radii wide, 96 x 54 px; ~40 CPU s): every key finite; EPT+VPT+DA's
@@ -121,29 +134,21 @@ if(TARGET meng15_fig1_sandcastle OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJ
   # long EPT tails: the whole point of the switch, Fig. 1's 628 vs 50 h); at least one grain
   # interaction before a switch makes the hybrid's total time > its high-order time; the
   # equal-time EPT render got at least one bundle per pixel.
-  add_test(NAME meng15_fig1_sandcastle_quick
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:meng15_fig1_sandcastle>
-                   "-DARGS=--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_fig1_sandcastle"
-                   "-DCHECKS=abs(bias_ept_vpt_da) < 0.15;bias_ept_vpt_da_stderr > 0;ept_vpt_da_speedup > 0;ept_vpt_da_speedup_high_order > 1;high_cpu_seconds_ept_vpt_da < high_cpu_seconds_ept;total_cpu_seconds_ept_vpt_da > high_cpu_seconds_ept_vpt_da;pixel_variance_ept > 0;pixel_variance_ept_vpt_da > 0;grains > 1000;equal_time_ept_spp >= 1"
-                   -DEXPECT_FILE=${CMAKE_CURRENT_BINARY_DIR}/meng15_fig1_sandcastle/fig1_sandcastle.exr
-                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
-  set_tests_properties(meng15_fig1_sandcastle_quick PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
-  add_test(NAME meng15_fig1_sandcastle_bad_size COMMAND $<TARGET_FILE:meng15_fig1_sandcastle> --castle-size 1)
-  set_tests_properties(meng15_fig1_sandcastle_bad_size PROPERTIES WILL_FAIL TRUE LABELS "example;hybrid")
+  hybrid_example_json_test(NAME meng15_fig1_sandcastle_quick TARGET meng15_fig1_sandcastle
+    ARGS "--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_fig1_sandcastle"
+    CHECKS "abs(bias_ept_vpt_da) < 0.15;bias_ept_vpt_da_stderr > 0;ept_vpt_da_speedup > 0;ept_vpt_da_speedup_high_order > 1;high_cpu_seconds_ept_vpt_da < high_cpu_seconds_ept;total_cpu_seconds_ept_vpt_da > high_cpu_seconds_ept_vpt_da;pixel_variance_ept > 0;pixel_variance_ept_vpt_da > 0;grains > 1000;equal_time_ept_spp >= 1"
+    EXPECT_FILE ${CMAKE_CURRENT_BINARY_DIR}/meng15_fig1_sandcastle/fig1_sandcastle.exr)
+  hybrid_bad_argument_test(meng15_fig1_sandcastle_bad_size meng15_fig1_sandcastle --castle-size 1)
 endif()
 if(TARGET meng15_fig7_glass_bead_cube OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/meng15_fig7_glass_bead_cube.cpp))
   # Fig. 7 at quick (15000 glass beads, cube 59 bead radii, 96 x 72 px, ~11 CPU s): every key finite;
   # the means of EPT+VPT / EPT+VPT+DA within 10 % / 20 % of EPT's; squared biases >= 0 and EPT's 0;
   # EPT+VPT needs less time to unit variance than EPT on lossless beads (measured 9x; bound 1).
-  add_test(NAME meng15_fig7_glass_bead_cube_quick
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:meng15_fig7_glass_bead_cube>
-                   "-DARGS=--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_fig7_glass_bead_cube"
-                   "-DCHECKS=abs(ept_vpt_rel_bias) < 0.1;abs(ept_vpt_da_rel_bias) < 0.2;ept_bias2 == 0;ept_vpt_bias2 >= 0;ept_vpt_da_bias2 >= 0;ept_vpt_speedup > 1;ept_vpt_da_speedup > 0;ept_vpt_equal_quality_speedup > 0;ept_ttuv > 0"
-                   -DEXPECT_FILE=${CMAKE_CURRENT_BINARY_DIR}/meng15_fig7_glass_bead_cube/meng15_fig7_glass_bead_cube.csv
-                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
-  set_tests_properties(meng15_fig7_glass_bead_cube_quick PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
-  add_test(NAME meng15_fig7_glass_bead_cube_bad_beads COMMAND $<TARGET_FILE:meng15_fig7_glass_bead_cube> --beads 1)
-  set_tests_properties(meng15_fig7_glass_bead_cube_bad_beads PROPERTIES WILL_FAIL TRUE LABELS "example;hybrid")
+  hybrid_example_json_test(NAME meng15_fig7_glass_bead_cube_quick TARGET meng15_fig7_glass_bead_cube
+    ARGS "--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/meng15_fig7_glass_bead_cube"
+    CHECKS "abs(ept_vpt_rel_bias) < 0.1;abs(ept_vpt_da_rel_bias) < 0.2;ept_bias2 == 0;ept_vpt_bias2 >= 0;ept_vpt_da_bias2 >= 0;ept_vpt_speedup > 1;ept_vpt_da_speedup > 0;ept_vpt_equal_quality_speedup > 0;ept_ttuv > 0"
+    EXPECT_FILE ${CMAKE_CURRENT_BINARY_DIR}/meng15_fig7_glass_bead_cube/meng15_fig7_glass_bead_cube.csv)
+  hybrid_bad_argument_test(meng15_fig7_glass_bead_cube_bad_beads meng15_fig7_glass_bead_cube --beads 1)
 endif()
 
 # MPI scale-out (ecosystem issue): meng15_hybrid_convergence on 2 ranks (rank r renders the rows
