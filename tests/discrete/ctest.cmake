@@ -1,30 +1,14 @@
 # Extra ctest entries for the discrete-media area (included from tests/CMakeLists.txt): quick runs of
 # the two Guo21 rendering examples with the issue's bounds, and bad-argument handling.
 
-# One example run checked by tests/common/check_json.cmake (the last JSON line against CHECKS, the
-# EXPECT_FILE written), optionally with a bad-argument run (BAD_ARGS) that must print BAD_REGEX;
-# both labelled "example;discrete".
-function(discrete_example_json_test)
-  cmake_parse_arguments(_t "" "NAME;TARGET;EXPECT_FILE;BAD_NAME;BAD_REGEX" "ARGS;CHECKS;BAD_ARGS" ${ARGN})
-  add_test(NAME ${_t_NAME}
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:${_t_TARGET}>
-                   "-DARGS=${_t_ARGS}"
-                   "-DCHECKS=${_t_CHECKS}"
-                   -DEXPECT_FILE=${_t_EXPECT_FILE}
-                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
-  if(_t_BAD_NAME)
-    add_test(NAME ${_t_BAD_NAME} COMMAND $<TARGET_FILE:${_t_TARGET}> ${_t_BAD_ARGS})
-    set_tests_properties(${_t_BAD_NAME} PROPERTIES PASS_REGULAR_EXPRESSION "${_t_BAD_REGEX}")
-  endif()
-  set_tests_properties(${_t_NAME} ${_t_BAD_NAME} PROPERTIES LABELS "example;discrete")
-endfunction()
+include(${PROJECT_SOURCE_DIR}/tests/common/example_test.cmake)
 
 if(TARGET guo21_fig14_convergence)
   set(_g14out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig14_out)
   # Each discrete medium has its paired continuous medium's brightness (Guo21 Sec. 6.3) within 5 %
   # (measured <= 1 %), the per-pixel difference falls with N, and r_c >> r_p keeps the membership
   # rule's extinction factor near 1.
-  discrete_example_json_test(NAME guo21_fig14_convergence_json TARGET guo21_fig14_convergence
+  grainlight_example_json_test(LABELS "example;discrete" NAME guo21_fig14_convergence_json TARGET guo21_fig14_convergence
     ARGS "--quality;quick;--threads;2;--out;${_g14out}"
     CHECKS "max_abs_rel_diff <= 0.05;rel_rmse_falls == 1;rel_rmse_last < 0.8 * rel_rmse_first;membership_factor < 1.02;query_radius_over_particle_radius >= 100;bytes_per_particle_max < 64"
     EXPECT_FILE ${_g14out}/guo21_fig14_convergence.csv
@@ -34,7 +18,7 @@ if(TARGET guo21_fig12_cornell)
   set(_g12out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig12_out)
   # 1e5 spheres of 1000 um: ours -FD (ray optics, r_c = r_p / 20) agrees with EPT of explicit
   # dielectric spheres within 5 % in mean radiance (measured ~1 %); ours with diffraction within 10 %.
-  discrete_example_json_test(NAME guo21_fig12_cornell_json TARGET guo21_fig12_cornell
+  grainlight_example_json_test(LABELS "example;discrete" NAME guo21_fig12_cornell_json TARGET guo21_fig12_cornell
     ARGS "--quality;quick;--threads;2;--out;${_g12out}"
     CHECKS "abs(rel_diff_no_diffraction) <= 0.05;abs(rel_diff_discrete) <= 0.10;rc_over_rp <= 0.1;count == 100000;memory_mb_discrete > 0;seconds_ept > 0"
     EXPECT_FILE ${_g12out}/ept.exr
@@ -46,7 +30,7 @@ if(TARGET guo21_fig17_grid_resolution)
   # fastest), the optimum is not at the fine end (> 0.2 per voxel), and one particle per voxel stays
   # within 1.6x of the fastest (measured 1.0-1.4x). Our valley from ~0.5 to 15 per voxel is flat
   # within the run-to-run noise of a shared machine, so the argmin itself is not checked (docs/guo21.md).
-  discrete_example_json_test(NAME guo21_fig17_grid_resolution_json TARGET guo21_fig17_grid_resolution
+  grainlight_example_json_test(LABELS "example;discrete" NAME guo21_fig17_grid_resolution_json TARGET guo21_fig17_grid_resolution
     ARGS "--quality;quick;--threads;2;--out;${_g17out}"
     CHECKS "time_at_one_over_fastest <= 1.6;finest_over_fastest > 1.2;fastest_particles_per_voxel > 0.2"
     EXPECT_FILE ${_g17out}/guo21_fig17_grid_resolution.csv
@@ -56,7 +40,7 @@ if(TARGET guo21_fig12_cornell)
   # Spectral (8 wavelength bins, ice index of Warren & Brandt 2008, CIE 1931 -> sRGB): ours -FD
   # agrees with EPT in mean luminance within 5 %, ours within 10 % (as in the grey comparison).
   set(_g12sout ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig12_spectral_out)
-  discrete_example_json_test(NAME guo21_fig12_cornell_spectral_json TARGET guo21_fig12_cornell
+  grainlight_example_json_test(LABELS "example;discrete" NAME guo21_fig12_cornell_spectral_json TARGET guo21_fig12_cornell
     ARGS "--quality;quick;--threads;2;--spectral;1;--paper-k;0;--spp;64;--width;48;--out;${_g12sout}"
     CHECKS "abs(rel_diff_no_diffraction_spectral) <= 0.05;abs(rel_diff_discrete_spectral) <= 0.10;spectral == 1"
     EXPECT_FILE ${_g12sout}/ours_spectral.exr)
@@ -88,7 +72,7 @@ if(TARGET guo21_fig18_absorption)
   # membership rule's extinction factor 1.04 at r_c = 20 um), and that of the pair with each C_t
   # scaled by the factor (the rule's Poisson average) within 5 % (measured <= 1.9 %, seeds 1, 2).
   set(_g18out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig18_out)
-  discrete_example_json_test(NAME guo21_fig18_absorption_json TARGET guo21_fig18_absorption
+  grainlight_example_json_test(LABELS "example;discrete" NAME guo21_fig18_absorption_json TARGET guo21_fig18_absorption
     ARGS "--quality;quick;--threads;2;--out;${_g18out}"
     CHECKS "albedo_falls == 1;mean_discrete_falls == 1;max_abs_rel_diff <= 0.08;max_abs_rel_diff_membership <= 0.05;mean_discrete_last_over_first < 0.5;count == 300000"
     EXPECT_FILE ${_g18out}/guo21_fig18_absorption.csv
@@ -101,7 +85,7 @@ if(TARGET guo21_fig19_psd)
   # 10 % (measured <= 5.3 % at quick); the -FD ensemble g equals 2 g_bulk - 1 (large particles:
   # Q_ext = 2, half of it diffraction with g = 1) within 0.01 (measured 0.003).
   set(_g19out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig19_out)
-  discrete_example_json_test(NAME guo21_fig19_psd_json TARGET guo21_fig19_psd
+  grainlight_example_json_test(LABELS "example;discrete" NAME guo21_fig19_psd_json TARGET guo21_fig19_psd
     ARGS "--quality;quick;--threads;2;--out;${_g19out}"
     CHECKS "mean_grows_with_rg == 1;max_abs_rel_diff_membership <= 0.10;max_abs_g_minus_no_diffraction_prediction <= 0.01"
     EXPECT_FILE ${_g19out}/guo21_fig19_psd.csv
@@ -112,7 +96,7 @@ if(TARGET guo21_table1)
   # Guo21 Table 1 / Sec. 6.8: time and memory per (stand-in) scene, ours vs EPT at equal spp. Timings
   # are reported, never asserted; memory: cloud + grid below 64 bytes per particle (measured ~25).
   set(_gt1out ${CMAKE_CURRENT_BINARY_DIR}/guo21_table1_out)
-  discrete_example_json_test(NAME guo21_table1_json TARGET guo21_table1
+  grainlight_example_json_test(LABELS "example;discrete" NAME guo21_table1_json TARGET guo21_table1
     ARGS "--quality;quick;--threads;2;--out;${_gt1out}"
     CHECKS "bytes_per_particle_max < 64"
     EXPECT_FILE ${_gt1out}/guo21_table1.csv
@@ -127,7 +111,7 @@ if(TARGET guo21_fig14_convergence)
   # Monte Carlo + placement error at 96 spp is ~0.8 %), and the realized cloud's sum C_t / V equals
   # the number-weighted bulk sigma_t within 1 % (measured 0.2 %).
   set(_g14mout ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig14_mixture_out)
-  discrete_example_json_test(NAME guo21_fig14_mixture_dense_limit_json TARGET guo21_fig14_convergence
+  grainlight_example_json_test(LABELS "example;discrete" NAME guo21_fig14_mixture_dense_limit_json TARGET guo21_fig14_convergence
     ARGS "--quality;quick;--threads;2;--mixture;on;--counts;1e6;--spp;96;--out;${_g14mout}"
     CHECKS "mixture == 1;share_species2 == 0.5;max_abs_rel_diff <= 0.03;max_abs_sigma_t_realized_over_bulk_minus_1 <= 0.01;membership_factor < 1.02"
     EXPECT_FILE ${_g14mout}/guo21_fig14_convergence.csv)
@@ -140,7 +124,7 @@ if(TARGET guo21_fig5_mie_vs_goa)
   # the light, where GOA without edge rays is 2-3x below Mie even at 2 um; docs/guo21.md); the Mie
   # phase table integrates to 1 (its C_s from the series, the table from |S1|^2 + |S2|^2: 1e-4).
   set(_g5out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig5_out)
-  discrete_example_json_test(NAME guo21_fig5_mie_vs_goa_json TARGET guo21_fig5_mie_vs_goa
+  grainlight_example_json_test(LABELS "example;discrete" NAME guo21_fig5_mie_vs_goa_json TARGET guo21_fig5_mie_vs_goa
     ARGS "--quality;quick;--threads;2;--out;${_g5out}"
     CHECKS "tv_shrinks == 1;tv_last < 0.8 * tv_first;abs_rel_diff_last < abs_rel_diff_first - 0.05;max_abs_phase_integral_mie_minus_1 < 0.003"
     EXPECT_FILE ${_g5out}/guo21_fig5_phase.csv
@@ -154,7 +138,7 @@ if(TARGET guo21_fig13_hg_fit)
   # the HG with the same g gives the mean radiance within 6 % (measured +2.3 +- 0.5 %); the
   # least-squares fit in ln p has a larger g (it follows the peak).
   set(_g13out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig13_out)
-  discrete_example_json_test(NAME guo21_fig13_hg_fit_json TARGET guo21_fig13_hg_fit
+  grainlight_example_json_test(LABELS "example;discrete" NAME guo21_fig13_hg_fit_json TARGET guo21_fig13_hg_fit
     ARGS "--quality;quick;--threads;2;--spp;256;--out;${_g13out}"
     CHECKS "forward_peak_ratio_tab_over_hg > 1000;rainbow_138_ratio_tab_over_hg > 3;abs(rel_diff_hg_same_g) <= 0.06;g_hg_lsq > g_tabulated;abs(g_tabulated_phase_object - g_tabulated) < 1e-3"
     EXPECT_FILE ${_g13out}/guo21_fig13_phase.csv
@@ -168,7 +152,7 @@ if(TARGET guo21_fig16_query_radius)
   # the render is > 1.5x brighter than the unscaled continuous pair (measured 2.3x); the factor tends
   # to 1 as k grows (1.19 at k = 1) and the graininess falls with k (blurred glints).
   set(_g16out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig16_out)
-  discrete_example_json_test(NAME guo21_fig16_query_radius_json TARGET guo21_fig16_query_radius
+  grainlight_example_json_test(LABELS "example;discrete" NAME guo21_fig16_query_radius_json TARGET guo21_fig16_query_radius
     ARGS "--quality;quick;--threads;2;--out;${_g16out}"
     CHECKS "max_abs_rel_diff <= 0.08;mean_first_over_continuous > 1.5;factor_first > 2;factor_last < 1.25;graininess_last < graininess_first"
     EXPECT_FILE ${_g16out}/guo21_fig16_query_radius.csv
@@ -180,7 +164,7 @@ if(TARGET guo21_fig20_time_vs_n)
   # (ray optics) has EPT's mean radiance within 10 % (two renders of the same physics; measured
   # <= 2.1 %, standard errors 2-4 % at quick), and the cloud + grid stay below 64 bytes per particle.
   set(_g20out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig20_out)
-  discrete_example_json_test(NAME guo21_fig20_time_vs_n_json TARGET guo21_fig20_time_vs_n
+  grainlight_example_json_test(LABELS "example;discrete" NAME guo21_fig20_time_vs_n_json TARGET guo21_fig20_time_vs_n
     ARGS "--quality;quick;--threads;2;--out;${_g20out}"
     CHECKS "max_abs_rel_diff_no_diffraction_n_le_1e5 <= 0.10;bytes_per_particle_max < 64;rc_over_rp <= 0.1"
     EXPECT_FILE ${_g20out}/guo21_fig20_time_vs_n.csv
@@ -196,7 +180,7 @@ if(TARGET guo21_fig10_lamp)
   # blocks only its geometric shadow, so ours / ours -FD follows the ratio of the membership factors
   # (0.50) within 10 % (measured 0.49).
   set(_g10out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig10_out)
-  discrete_example_json_test(NAME guo21_fig10_lamp_json TARGET guo21_fig10_lamp
+  grainlight_example_json_test(LABELS "example;discrete" NAME guo21_fig10_lamp_json TARGET guo21_fig10_lamp
     ARGS "--quality;quick;--threads;2;--out;${_g10out}"
     CHECKS "abs(rel_diff_no_diffraction_last) <= 3 * rel_diff_no_diffraction_se_last + 0.03;max_z_no_diffraction <= 4;abs(ours_over_no_diffraction_last / predicted_ours_over_no_diffraction_last - 1) <= 0.10;membership_factor_max < 1.1;bytes_per_particle_max < 64"
     EXPECT_FILE ${_g10out}/guo21_fig10_lamp.csv

@@ -2,6 +2,8 @@
 # Meng15 hybrid example (small sphere of grains) reports its speedups; bad arguments exit with 2;
 # meng15_table2_ttuv at quick prints Table 2's JSON shape with finite numbers.
 
+include(${PROJECT_SOURCE_DIR}/tests/common/example_test.cmake)
+
 # One example run (LABELS "example;hybrid", TIMEOUT 600) whose last JSON line is checked against
 # CHECKS: per scene (SCENES, KEYS; CHECKER defaults to tests/hybrid/check_scenes_json.cmake) or flat
 # (tests/common/check_json.cmake, with the file EXPECT_FILE when given).
@@ -15,18 +17,15 @@ function(hybrid_example_json_test)
              COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:${_t_TARGET}>
                      "-DARGS=${_t_ARGS}" "-DSCENES=${_t_SCENES}" "-DKEYS=${_t_KEYS}" "-DCHECKS=${_t_CHECKS}"
                      -P ${_t_CHECKER})
-  elseif(_t_EXPECT_FILE)
-    add_test(NAME ${_t_NAME}
-             COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:${_t_TARGET}>
-                     "-DARGS=${_t_ARGS}" "-DCHECKS=${_t_CHECKS}" -DEXPECT_FILE=${_t_EXPECT_FILE}
-                     -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
+    set_tests_properties(${_t_NAME} PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
   else()
-    add_test(NAME ${_t_NAME}
-             COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:${_t_TARGET}>
-                     "-DARGS=${_t_ARGS}" "-DCHECKS=${_t_CHECKS}"
-                     -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
+    set(_expect)
+    if(_t_EXPECT_FILE)
+      set(_expect EXPECT_FILE ${_t_EXPECT_FILE})
+    endif()
+    grainlight_example_json_test(NAME ${_t_NAME} TARGET ${_t_TARGET} ARGS "${_t_ARGS}" CHECKS "${_t_CHECKS}"
+                                 LABELS "example;hybrid" TIMEOUT 600 ${_expect})
   endif()
-  set_tests_properties(${_t_NAME} PROPERTIES LABELS "example;hybrid" TIMEOUT 600)
 endfunction()
 # A run of TARGET with bad arguments (ARGN) that must exit non-zero.
 function(hybrid_bad_argument_test name target)

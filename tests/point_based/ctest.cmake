@@ -1,20 +1,7 @@
 # Extra ctest entries for the point_based area (included from tests/CMakeLists.txt): the Wang18
 # example at quick quality. Seeds are fixed, so the run is deterministic for any thread count.
 
-# One example run whose last JSON line is checked against CHECKS (tests/common/check_json.cmake)
-# and a run with bad arguments (BAD_ARGS) that must exit non-zero; both labelled
-# "example;point_based".
-function(point_based_example_json_test)
-  cmake_parse_arguments(_t "" "NAME;TARGET;BAD_NAME" "ARGS;CHECKS;BAD_ARGS" ${ARGN})
-  add_test(NAME ${_t_NAME}
-           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:${_t_TARGET}>
-                   "-DARGS=${_t_ARGS}"
-                   "-DCHECKS=${_t_CHECKS}"
-                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
-  add_test(NAME ${_t_BAD_NAME} COMMAND $<TARGET_FILE:${_t_TARGET}> ${_t_BAD_ARGS})
-  set_tests_properties(${_t_BAD_NAME} PROPERTIES WILL_FAIL TRUE)
-  set_tests_properties(${_t_NAME} ${_t_BAD_NAME} PROPERTIES LABELS "example;point_based")
-endfunction()
+include(${PROJECT_SOURCE_DIR}/tests/common/example_test.cmake)
 
 # Thick case (radius 20 green mean free paths, the JSON's main keys, Alg. 1 at the paper's
 # eps1 = 0.2 for BmpS., Table 3): every component's relative difference to the per-channel VPT
@@ -25,7 +12,7 @@ endfunction()
 # small_*, eps1 = 1): single and double within 5 % of the VPT, the bounced share of the
 # reference in [0.1, 0.4].
 if(TARGET wang18_point_based OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/wang18_point_based.cpp))
-  point_based_example_json_test(NAME wang18_point_based_json TARGET wang18_point_based
+  grainlight_example_json_test(LABELS "example;point_based" NAME wang18_point_based_json TARGET wang18_point_based
     ARGS "--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/wang18_point_based"
     CHECKS "abs(rel_diff_total) <= 0.05;abs(rel_diff_multiple) <= 0.05;abs(rel_diff_single) < 1;abs(rel_diff_double) < 1;abs(rel_diff_bounced) < 1;speedup_equal_error > 0;speedup_equal_error < 1e9;vpt_variance_half_ratio > 0.7;vpt_variance_half_ratio < 1.3;abs(small_rel_diff_single) < 0.05;abs(small_rel_diff_double) < 0.05;small_bounced_share > 0.1;small_bounced_share < 0.4;abs(small_rel_diff_total) < 1;volume_samples > 100000"
     BAD_NAME wang18_point_based_bad_argument BAD_ARGS --vpt-spp 12)
@@ -42,7 +29,7 @@ if(TARGET wang18_table3_materials OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PRO
          "abs(${_m}_rel_diff_total) < 1e9" "${_m}_rel_diff_total_stderr > 0" "${_m}_rel_diff_total_stderr < 1e9"
          "${_m}_seconds_point_based > 0" "${_m}_seconds_vpt > 0" "${_m}_memory_mb > 0" "${_m}_memory_mb < 1e6")
   endforeach()
-  point_based_example_json_test(NAME wang18_table3_materials_json TARGET wang18_table3_materials
+  grainlight_example_json_test(LABELS "example;point_based" NAME wang18_table3_materials_json TARGET wang18_table3_materials
     ARGS "--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/wang18_table3_materials"
     CHECKS "${_w18_checks}"
     BAD_NAME wang18_table3_materials_bad_argument BAD_ARGS --materials glass)
@@ -55,7 +42,7 @@ endif()
 # between batch halves (measuring.md: within 30 %), a finite positive equal-error speed-up; a bad
 # --vpt-spp exits non-zero.
 if(TARGET wang18_fig12_components OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/wang18_fig12_components.cpp))
-  point_based_example_json_test(NAME wang18_fig12_components_json TARGET wang18_fig12_components
+  grainlight_example_json_test(LABELS "example;point_based" NAME wang18_fig12_components_json TARGET wang18_fig12_components
     ARGS "--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/wang18_fig12_components"
     CHECKS "abs(rel_diff_total) <= 0.15;abs(rel_diff_multiple) <= 0.15;rel_se_total > 0;abs(rel_diff_single) < 0.5;abs(rel_diff_double) < 0.5;abs(rel_diff_bounced) < 0.5;e2_total > 0;speedup_equal_error > 0;speedup_equal_error < 1e9;vpt_variance_half_ratio > 0.7;vpt_variance_half_ratio < 1.3;volume_samples > 100000;triangles >= 5120"
     BAD_NAME wang18_fig12_components_bad_argument BAD_ARGS --vpt-spp 12)
@@ -120,7 +107,7 @@ endif()
 # docs/wang18.md); every relative difference and e^2 finite; the MS table's multiple term at
 # g = 0.95 (+401 % here, not converged in its direction grid and extent) is reported, not asserted. A --large-factor below 1 exits non-zero.
 if(TARGET wang18_fig20_vs_shells OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/wang18_fig20_vs_shells.cpp))
-  point_based_example_json_test(NAME wang18_fig20_vs_shells_json TARGET wang18_fig20_vs_shells
+  grainlight_example_json_test(LABELS "example;point_based" NAME wang18_fig20_vs_shells_json TARGET wang18_fig20_vs_shells
     ARGS "--quality;quick;--threads;2;--width;16;--shell-paths;20000;--vpt-spp;128;--shell-spp;64;--rays;2;--out;${CMAKE_CURRENT_BINARY_DIR}/wang18_fig20_vs_shells"
     CHECKS "memory_shells_equal_mb <= memory_ms_table_mb;memory_shells_equal_mb > 0.9 * memory_ms_table_mb;memory_shells_large_mb > 3 * memory_ms_table_mb;memory_shells_large_mb <= 5 * memory_ms_table_mb;abs(rel_diff_multiple_shells_large) < 0.35;abs(rel_diff_multiple_shells_equal) < 1;abs(rel_diff_multiple_table) < 1e3;e2_table > 0;e2_shells_equal > 0;e2_shells_large > 0;vpt_multiple > 0"
     BAD_NAME wang18_fig20_vs_shells_bad_argument BAD_ARGS --large-factor 0.5)
