@@ -3,12 +3,15 @@
 // guo21_cornell_scene.hpp). For each N: EPT of explicit dielectric spheres (ExplicitSphereMedium:
 // exact ray-sphere hits through the particle grid + Fresnel), ours (discrete medium with
 // diffraction) and ours -FD (ray optics), all with r_c = r_p / 20 (as guo21_fig12_cornell's EPT
-// comparison), each split into 8 seeded batches: process CPU seconds, the time to unit variance
+// comparison), in a cloud of non-overlapping spheres (random sequential addition: explicit-sphere
+// EPT is exact only for disjoint spheres; `--non-overlapping off` gives the Poisson cloud, whose
+// overlaps at N >= 1e6 darken EPT), each split into 8 seeded batches: process CPU seconds, the time to unit variance
 // (per-sample variance x CPU seconds per sample, measuring.md) and the means over the pixels that
 // look through the cloud, in one run on the same scene.
 //
 //   guo21_fig20_time_vs_n [--quality quick|full] [--out DIR] [--seed S] [--threads N] [--spp N]
-//                         [--width W] [--counts 1e4,1e5,...] [--rc-over-rp F] [--checkpoint SECONDS] [--resume]
+//                         [--width W] [--counts 1e4,1e5,...] [--rc-over-rp F] [--non-overlapping on|off]
+//                         [--checkpoint SECONDS] [--resume]
 //
 // Every render is split by rows over MPI ranks and resumable (--checkpoint / --resume: one
 // checkpoint per batch in --out); CPU seconds are the renders' process CPU time summed over ranks.
@@ -45,6 +48,9 @@ int main(int argc, char** argv) {
             const std::vector<double> counts = ex.opt<std::vector<double>>("counts", {1e4, 3e4, 1e5, 3e5, 1e6},
                                                                            {1e4, 3e4, 1e5, 3e5, 1e6, 3e6}, "particle counts");
             const double rc_over_rp = ex.opt<double>("rc-over-rp", 0.05, "query radius r_c / r_p");
+            const bool hard = ex.opt<bool>("non-overlapping", true,
+                                           "on: hard spheres (random sequential addition; EPT of explicit spheres is exact), "
+                                           "off: Poisson centres (overlaps allowed, which EPT does not resolve)");
             ex.checkpointable();
             ex.ready();
             guo21_mpi::quiet_other_ranks(ex);
@@ -80,9 +86,12 @@ int main(int argc, char** argv) {
                                   "rel_diff_no_diffraction_se", "bytes_per_particle"});
             for (double Nd : counts) {
                 const auto N = std::uint64_t(Nd);
-                auto cloud = std::make_shared<gl::ParticleCloud>(gl::ParticleCloud::generate(
-                    gl::BoxBoundary(guo21_cornell::kLo, guo21_cornell::kHi), N,
-                    {gl::cloud_species(gl::MonodispersePsd(guo21_cornell::kRadiusUm))}, ex.seed() * 31 + 20 + N, 1e6));
+                const gl::BoxBoundary box(guo21_cornell::kLo, guo21_cornell::kHi);
+                const std::vector<gl::CloudSpecies> species{gl::cloud_species(gl::MonodispersePsd(guo21_cornell::kRadiusUm))};
+                const std::uint64_t cloud_seed = ex.seed() * 31 + 20 + N;
+                auto cloud = std::make_shared<gl::ParticleCloud>(
+                    hard ? gl::ParticleCloud::generate_non_overlapping(box, N, species, cloud_seed, 1e6)
+                         : gl::ParticleCloud::generate(box, N, species, cloud_seed, 1e6));
                 const std::string tag = "N=" + std::to_string(N);
                 guo21_cornell::Run ept;
                 {
@@ -153,6 +162,7 @@ int main(int argc, char** argv) {
                 .integer("batches", batches)
                 .num("radius_um", guo21_cornell::kRadiusUm)
                 .num("rc_over_rp", rc_over_rp)
+                .boolean("non_overlapping", hard)
                 .num("predicted_extinction_factor", factor)
                 .nums("N", v_n)
                 .nums("cpu_seconds_ept", v_te)
