@@ -478,6 +478,78 @@ TEST_CASE("discrete VPT is deterministic across thread counts", "[discrete][dete
     CHECK(a.rgb == c.rgb);
 }
 
+namespace {
+// Ray optics of one sphere of relative index m for unpolarized light, by quadrature over the
+// impact parameter (uniform in b^2) and a sum over every order p (van de Hulst 1957, Sec. 12.2:
+// deviation pi - 2i for p = 0, 2(i - t) + (p - 1)(pi - 2t) for p >= 1; weights R for p = 0 and
+// (1 - R)^2 R^(p - 1) per polarization, R = |r_perp|^2 or |r_parl|^2 of the Fresnel formulas).
+// polarized: the two polarizations summed (exact); otherwise the unpolarized R at every bounce.
+// Returns the mean cosine g; back = the share scattered into the backward hemisphere.
+double sphere_ray_optics_g(double m, bool polarized, double& back) {
+    const int nb = 20000;
+    double g = 0, wsum = 0;
+    back = 0;
+    for (int k = 0; k < nb; ++k) {
+        const double b = std::sqrt((k + 0.5) / nb), i = std::asin(b), t = std::asin(b / m);
+        const double ci = std::cos(i), ct = std::cos(t);
+        const double rs = std::pow((ci - m * ct) / (ci + m * ct), 2), rp = std::pow((m * ci - ct) / (m * ci + ct), 2);
+        const double Rs[2] = {rs, rp}, Ru = 0.5 * (rs + rp);
+        for (int p = 0; p < 400; ++p) {
+            const double dev = p == 0 ? gl::pi_v<double> - 2 * i : 2 * (i - t) + (p - 1) * (gl::pi_v<double> - 2 * t);
+            double w = 0;
+            for (int a = 0; a < 2; ++a) {
+                const double R = polarized ? Rs[a] : Ru;
+                w += 0.5 * (p == 0 ? R : (1 - R) * (1 - R) * std::pow(R, p - 1));
+            }
+            g += w * std::cos(dev);
+            back += std::cos(dev) < 0 ? w : 0.0;
+            wsum += w;
+        }
+    }
+    back /= wsum;
+    return g / wsum;
+}
+}  // namespace
+
+TEST_CASE("explicit spheres: one crossing is ray optics with both polarizations (every order)", "[discrete][ept]") {
+    // Parallel light on one sphere: the exit directions of the whole-sphere crossing against the
+    // closed-form sum over orders. The unpolarized-per-bounce model (what a renderer's Fresnel
+    // gives) differs by more than the test's resolution, so the test can tell them apart.
+    auto cloud = std::make_shared<gl::ParticleCloud>(
+        gl::ParticleCloud::from_particles({{0, 0, 0, 1}}, gl::Aabb<double>{Vec3d(-2.0), Vec3d(2.0)}, 64.0));
+    auto grid = std::make_shared<gl::ParticleGrid>(*cloud, gl::ParticleGridSettings{});
+    const double m = 1.31;
+    const gl::ExplicitSphereMedium<float> ept(grid, float(m));
+    const int n = 2000000;
+    double sum = 0, sum2 = 0, back = 0;
+    int scattered = 0, off_surface = 0;
+    for (int k = 0; k < n; ++k) {
+        gl::Rng rng = gl::Rng::from_key(77, std::uint64_t(k));
+        const double b = std::sqrt(rng.uniform<double>()), phi = 2 * gl::pi_v<double> * rng.uniform<double>();
+        const gl::Ray<float> ray(Vec3f(float(b * std::cos(phi)), float(b * std::sin(phi)), -3.0f), Vec3f(0, 0, 1));
+        const auto it = ept.sample_interaction(ray, 10.0f, rng);
+        if (it.kind != gl::EventKind::scatter) continue;
+        ++scattered;
+        // The event is outside the sphere, on its surface, leaving it.
+        off_surface += !(std::abs(glm::length(Vec3d(it.p)) - 1) < 1e-3);
+        const double c = it.w.z;
+        sum += c;
+        sum2 += c * c;
+        back += c < 0;
+    }
+    CHECK(scattered >= n - n / 1000);  // b < 1 hits except the rim's round-off
+    CHECK(off_surface == 0);
+    const double g = sum / scattered, se = std::sqrt((sum2 / scattered - g * g) / scattered);
+    double back_pol = 0, back_unpol = 0;
+    const double g_pol = sphere_ray_optics_g(m, true, back_pol), g_unpol = sphere_ray_optics_g(m, false, back_unpol);
+    INFO("EPT g " << g << " +- " << se << ", ray optics (s + p) " << g_pol << ", unpolarized per bounce " << g_unpol
+                  << "; backward share " << back / scattered << " vs " << back_pol << " / " << back_unpol);
+    CHECK(std::abs(g - g_pol) < 4 * se);
+    CHECK(std::abs(g_unpol - g_pol) > 8 * se);  // the test resolves the polarization model
+    const double bs = back / scattered, bse = std::sqrt(bs * (1 - bs) / scattered);
+    CHECK(std::abs(bs - back_pol) < 4 * bse);
+}
+
 TEST_CASE("explicit spheres: exact hits through the grid agree with brute force", "[discrete][ept]") {
     const gl::BoxBoundary box(Vec3d(0.0), Vec3d(1.0));
     auto cloud = std::make_shared<gl::ParticleCloud>(
