@@ -11,6 +11,7 @@
 //
 //   guo21_fig20_time_vs_n [--quality quick|full] [--out DIR] [--seed S] [--threads N] [--spp N]
 //                         [--width W] [--counts 1e4,1e5,...] [--rc-over-rp F] [--non-overlapping on|off]
+//                         [--forced-collision Q]
 //                         [--checkpoint SECONDS] [--resume]
 //
 // Every render is split by rows over MPI ranks and resumable (--checkpoint / --resume: one
@@ -51,6 +52,9 @@ int main(int argc, char** argv) {
             const bool hard = ex.opt<bool>("non-overlapping", true,
                                            "on: hard spheres (random sequential addition; EPT of explicit spheres is exact), "
                                            "off: Poisson centres (overlaps allowed, which EPT does not resolve)");
+            const double forced = ex.opt<double>("forced-collision", 0.5,
+                                                 "ours: forced-collision floor q_min in [0, 1) (0 = analog free flights, "
+                                                 "which stop at the collision)");
             ex.checkpointable();
             ex.ready();
             guo21_mpi::quiet_other_ranks(ex);
@@ -59,6 +63,7 @@ int main(int argc, char** argv) {
             if (counts.empty()) throw gl_examples::cli_error("--counts needs at least one value");
             for (double c : counts)
                 if (!(c >= 1 && c <= 1e8)) throw gl_examples::cli_error("--counts values must be in [1, 1e8]");
+            if (!(forced >= 0 && forced < 1)) throw gl_examples::cli_error("--forced-collision must be in [0, 1)");
             if (!(rc_over_rp > 0 && rc_over_rp <= 10)) throw gl_examples::cli_error("--rc-over-rp must be in (0, 10]");
             const double r_p = guo21_cornell::kRadiusUm * 1e-6, r_c = rc_over_rp * r_p;
             const auto camera = guo21_cornell::camera(width);
@@ -109,6 +114,7 @@ int main(int argc, char** argv) {
                     gl::DiscreteMediumSettings ms;
                     ms.query_radius = r_c;
                     ms.diffraction = diffraction;
+                    ms.forced_collision = forced;
                     using M = gl::DiscreteParticleMedium<float>;
                     gl::Scene<M> sc;
                     guo21_cornell::build_cornell(sc, sc.add_medium(M(grid, {model}, ms)), 1.5 * r_p + r_c);
@@ -163,6 +169,7 @@ int main(int argc, char** argv) {
                 .num("radius_um", guo21_cornell::kRadiusUm)
                 .num("rc_over_rp", rc_over_rp)
                 .boolean("non_overlapping", hard)
+                .num("forced_collision", forced)
                 .num("predicted_extinction_factor", factor)
                 .nums("N", v_n)
                 .nums("cpu_seconds_ept", v_te)

@@ -30,6 +30,7 @@
 /// q = max(P, q_min) (q_min = `forced_collision`, default 0.5), the member is chosen in order
 /// along the ray by inverting the cumulative 1 - e^{-sum tau_i} (a second gather), and the event
 /// weight is (P / q) C_s,i / C_t,i; otherwise the path reaches t_max with weight (1 - P) / (1 - q).
+/// q_min = 0 is the analog sampler, done in one pass that stops at the collision (sample_analog).
 /// Unbiased for the discrete transport above (docs/guo21.md); the direction is sampled from the
 /// member's phase table (has_direction: the medium chooses it; integrators/discrete_vpt.hpp does
 /// NEE with `phase_eval(particle_at(p), ...)`). -FD (`diffraction = false`): amplitudes without
@@ -316,6 +317,7 @@ public:
     /// A free flight (see the file comment).
     [[nodiscard]] Interaction<F, S> sample_interaction(const Ray<F>& ray, F t_max, Rng& rng) const noexcept {
         Interaction<F, S> it;
+        if (st_.forced_collision == 0) return sample_analog(ray, t_max, rng);
         // Pass 1: tau of the segment (P = 1 - e^{-tau}; beyond tau = 40 it is 1 in float and the
         // gather stops after the current voxel), keeping up to kBuffer members so that pass 2 is
         // not needed when they are all (sparse or opaque members).
@@ -417,8 +419,48 @@ private:
         }
     };
 
-    /// The member where the cumulative optical depth (in order of s) first reaches tau_star.
-    void choose_member(const Ray<F>& ray, F t_max, F tau_star, std::int64_t& chosen, float& s_chosen) const noexcept {
+    /// Analog free flight (forced_collision = 0) in one pass: tau* ~ Exp(1) is drawn first and the
+    /// members are walked in order of s until their cumulative optical depth reaches it, so the
+    /// walk stops at the collision instead of gathering the whole segment (member i collides with
+    /// probability 1 - e^{-C_t,i / A} given the path reached it: the same law as the forced
+    /// sampler's with q = P). Event weight = the member's albedo; escape weight 1.
+    [[nodiscard]] Interaction<F, S> sample_analog(const Ray<F>& ray, F t_max, Rng& rng) const noexcept {
+        Interaction<F, S> it;
+        const F tau_star = -std::log1p(-std::min(rng.uniform<F>(), F(1) - F(1e-7)));
+        std::int64_t chosen = -1;
+        float s_chosen = 0;
+        choose_member(ray, t_max, tau_star, chosen, s_chosen, false);
+        if (chosen < 0) {
+            it.kind = EventKind::escape;
+            it.t = t_max;
+            it.p = ray(t_max);
+            it.weight = S(F(1));
+            return it;
+        }
+        const std::uint32_t i = std::uint32_t(chosen);
+        const CloudParticle& cp = cloud()[i];
+        it.kind = EventKind::scatter;
+        it.t = F(s_chosen);
+        it.p = Vec3<F>(cp.x, cp.y, cp.z);
+        const auto ps = phase_of(i).sample(ray.d, rng.template uniform2<F>());
+        if (!ps) {
+            it.kind = EventKind::absorb;
+            it.weight = S(F(0));
+            return it;
+        }
+        it.has_direction = true;
+        it.w = ps.w;
+        it.direction_pdf = ps.pdf;
+        it.nee = NeeKind::none;
+        it.weight = S(albedo(i)) * ps.weight;
+        return it;
+    }
+
+    /// The member where the cumulative optical depth (in order of s) first reaches tau_star;
+    /// with `fallback`, the last member when round-off leaves tau_star (< the segment's tau)
+    /// unreached; without, chosen stays -1 then (the analog sampler's escape).
+    void choose_member(const Ray<F>& ray, F t_max, F tau_star, std::int64_t& chosen, float& s_chosen,
+                       bool fallback = true) const noexcept {
         const Vec3<float> o(ray.o), d(ray.d);
         const float rc = float(r_c_);
         const CloudParticle* ps = cloud().particles().data();
@@ -475,7 +517,7 @@ private:
             }
             return true;
         });
-        if (chosen < 0 && last_member >= 0) {
+        if (fallback && chosen < 0 && last_member >= 0) {
             chosen = last_member;
             s_chosen = last_s;
         }
