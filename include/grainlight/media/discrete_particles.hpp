@@ -38,8 +38,9 @@
 /// r below the switch radius, keep their exact optics).
 ///
 /// ExplicitSphereMedium (models Medium): the same cloud as explicit smooth dielectric spheres
-/// (exact ray-sphere hits through the grid, Fresnel reflection/refraction by optics/fresnel.hpp
-/// chosen with probability F): Guo21's EPT reference. Overlapping spheres are not resolved (a path
+/// (exact ray-sphere hits through the grid; a sphere is crossed as one event, with one
+/// polarization drawn per crossing and its Fresnel R from optics/fresnel.hpp at every internal
+/// bounce: ray optics of a sphere, every order): Guo21's EPT reference. Overlapping spheres are not resolved (a path
 /// inside sphere i sees only sphere i), so the reference is exact only for a cloud of disjoint
 /// spheres (ParticleCloud::generate_non_overlapping); in a Poisson cloud the overlaps darken it
 /// (-5.5 % at 3.7 % volume fraction in the Fig. 20 Cornell box, docs/guo21.md).
