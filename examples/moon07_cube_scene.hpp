@@ -581,6 +581,36 @@ struct ShellSceneOptions {
     }
 };
 
+/// Face optics at the shell exit (Figs. 9, 11; ShellFaceOptics, integrators/shell_tracer.hpp):
+/// `--face-optics on|off` (default on). With it, a shell step that leaves the cube crosses the
+/// face inside glass with the probability q(|cos theta|) measured on the packing's own paths
+/// (plane_crossing_glass_fraction, 8 cells), and is Fresnel-reflected back or refracted out there.
+struct FaceOpticsOption {
+    bool on = true;
+    static FaceOpticsOption declare(gl_examples::Example& ex) {
+        FaceOpticsOption f;
+        const std::string v = ex.opt<std::string>(
+            "face-optics", "on",
+            "on: shell exits through a cube face meet its glass-air interface with the measured glass fraction q(|cos|) (Fresnel reflection back, refraction out); off: they leave straight (Moon07)");
+        if (v != "on" && v != "off") throw gl_examples::cli_error("--face-optics = " + v + " must be on or off");
+        f.on = v == "on";
+        return f;
+    }
+    /// The tracer's face optics for a scene whose faces are glass (cut spheres, not index matched);
+    /// off otherwise. `q_mean` receives the crossing-weighted mean of q (0 when off).
+    [[nodiscard]] gl::ShellFaceOptics optics(const gl::PeriodicTile& rsa, double eta, bool glass_faces, bool full,
+                                             std::uint64_t seed, double& q_mean) const {
+        q_mean = 0;
+        if (!on || !glass_faces) return {};
+        const double R = rsa.radius();
+        gl::ShellFaceOptics f;
+        f.eta = eta;
+        f.q = gl::plane_crossing_glass_fraction(rsa, eta, 8, full ? 4000 : 1000, 400 * R, 20 * R, seed ^ 0xFACEu);
+        for (const double v : f.q) q_mean += v / double(f.q.size());
+        return f;
+    }
+};
+
 /// The shell table of a scene of random glass spheres (Figs. 9, 11, 12): --shell-radii radii evenly
 /// from r_0 to r_max, the scene's grid (full 50 x 50 x 25, quick 24 x 16 x 16 cells, rank 5),
 /// sampled from the scene's own RSA packing (the medium's random process: ior 1.5, no absorption,

@@ -8,6 +8,7 @@
 //        [--spheres N] [--fraction F] [--width W] [--spp-pt N] [--spp-low N] [--spp-high N]
 //        [--batches B] [--min-scatter K] [--switch-depth D] [--light-size S] [--light-height H]
 //        [--spot-angle DEG] [--shell-paths N] [--shell-radii N] [--rebuild-table] [--cut-spheres] [--no-nee]
+//        [--face-optics on|off] [--clear-faces]
 //
 // Scene: the cube of moon07_fig9_cube_shadow (moon07_cube_scene.hpp; same spheres, table and
 // camera), no blocker; the spotlight is a square emitter of side 0.2 L (--light-size) at
@@ -49,6 +50,10 @@ int main(int argc, char** argv) {
         const bool whole_spheres = ex.opt<bool>(
             "whole-spheres", false,
             "whole spheres only, centres >= R inside (a sphere-free skin the shells do not describe: +12 % bias at L = 59 R)");
+        const bool clear_faces = ex.opt<bool>(
+            "clear-faces", false,
+            "cut spheres' flat faces index matched (no refraction or Fresnel at the cube's faces; face optics then off)");
+        const FaceOpticsOption fo = FaceOpticsOption::declare(ex);
         ex.checkpointable();
         ex.ready();
         so.check();
@@ -87,6 +92,7 @@ int main(int argc, char** argv) {
         if (!whole_spheres) {  // default: the medium the shell table describes up to the faces
             scene.tile = rsa;
             scene.cut = true;
+            scene.clear_faces = clear_faces;
             kept = rsa.centers();
         }
         std::cerr << "moon07_fig11: " << kept.size() << " spheres in a cube of side " << L << " R (f = " << fraction
@@ -98,7 +104,10 @@ int main(int argc, char** argv) {
         const gl::ShellTable& table = ct.table;
         const double raw_bytes = ct.raw_bytes, factored_bytes = ct.factored_bytes;
 
-        const gl::ShellTracerOptions to = so.tracer_options(R);
+        gl::ShellTracerOptions to = so.tracer_options(R);
+        double face_q = 0;
+        to.face = fo.optics(rsa, scene.eta, scene.cut && !scene.clear_faces, full, seed, face_q);
+        if (to.face.enabled()) std::cerr << "moon07_fig11: face optics, glass fraction of face crossings q = " << face_q << "\n";
         scene.hand_back = so.hand_back;
         const gl::ShellTracer<S1, gl::BoxDistance> tracer(table, scene.cube, to);
 
@@ -153,6 +162,10 @@ int main(int argc, char** argv) {
             }
         const double spot_fraction_pt = in_pt / std::max(1e-300, sum_pt);
         const double spot_fraction_sh = in_sh / std::max(1e-300, sum_sh);
+        // Per-region means: the spot (pixels seeing it) and the rest of the cube's pixels.
+        const double n_rest = std::max(1.0, double(n_mask) - double(n_spot));
+        const double mean_pt_spot = in_pt / double(n_spot), mean_sh_spot = in_sh / double(n_spot);
+        const double mean_pt_rest = (sum_pt - in_pt) / n_rest, mean_sh_rest = (sum_sh - in_sh) / n_rest;
 
         // --- outputs ---
         write_shell_images(out, "moon07_fig11", st, W, H);
@@ -188,10 +201,19 @@ int main(int argc, char** argv) {
             .num("paper_spot_fraction_rendered", 0.57)
             .num("paper_spot_fraction_photo", 0.65)
             .integer("spot_pixels", (long long)n_spot)
+            .num("mean_pt_spot", mean_pt_spot)
+            .num("mean_shells_spot", mean_sh_spot)
+            .num("rel_diff_spot", mean_sh_spot / std::max(1e-300, mean_pt_spot) - 1)
+            .num("mean_pt_rest", mean_pt_rest)
+            .num("mean_shells_rest", mean_sh_rest)
+            .num("rel_diff_rest", mean_sh_rest / std::max(1e-300, mean_pt_rest) - 1)
+            .boolean("clear_faces", scene.clear_faces)
             .num("paper_speedup", 27.0)
             .boolean("cut_spheres", scene.cut)
             .boolean("exit_rule_table", to.exit_rule == gl::ShellExitRule::table)
             .boolean("hand_back", scene.hand_back)
+            .boolean("face_optics", to.face.enabled())
+            .num("face_glass_fraction", face_q)
             .str("cos_cells", so.cos_cells)
             .integer("min_scatter", so.min_scatter)
             .num("switch_depth", to.switch_depth)

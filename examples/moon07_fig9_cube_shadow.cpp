@@ -9,7 +9,7 @@
 //        [--spheres N] [--fraction F] [--width W] [--spp-pt N] [--spp-low N] [--spp-high N]
 //        [--batches B] [--min-scatter K] [--switch-depth D] [--light-size S] [--shell-paths N]
 //        [--shell-radii N] [--rebuild-table] [--cos-cells angle|cos] [--exit-rule table|radial]
-//        [--hand-back] [--no-nee] [--clear-faces] [--whole-spheres] [--sky-cone DEG]
+//        [--hand-back] [--no-nee] [--clear-faces] [--whole-spheres] [--sky-cone DEG] [--face-optics on|off]
 //   mpirun -np K moon07_fig9_cube_shadow ...   (built with MPI: rank r renders the rows y % K == r
 //        of every batch, gathered on rank 0: the same EXRs as one process)
 //
@@ -61,6 +61,7 @@ int main(int argc, char** argv) {
         const bool clear_faces = ex.opt<bool>(
             "clear-faces", false,
             "cut spheres' flat faces index matched (no refraction or Fresnel at the cube's faces; isolates the faces' share of the bias)");
+        const FaceOpticsOption fo = FaceOpticsOption::declare(ex);
         ex.checkpointable();
         ex.ready();
         so.check();
@@ -122,6 +123,8 @@ int main(int argc, char** argv) {
 
         gl::ShellTracerOptions to = so.tracer_options(R);
         if (sky_cone > 0) to.nee = false;
+        double face_q = 0;
+        to.face = fo.optics(rsa, scene.eta, scene.cut && !scene.clear_faces, full, seed, face_q);
         scene.hand_back = so.hand_back;
         const gl::ShellTracer<S1, gl::BoxDistance> tracer(table, scene.cube, to);
 
@@ -181,6 +184,8 @@ int main(int argc, char** argv) {
             .boolean("clear_faces", scene.clear_faces)
             .boolean("exit_rule_table", to.exit_rule == gl::ShellExitRule::table)
             .boolean("hand_back", scene.hand_back)
+            .boolean("face_optics", to.face.enabled())
+            .num("face_glass_fraction", face_q)
             .num("sky_cone_deg", sky_cone)
             .boolean("nee", to.nee)
             .str("cos_cells", so.cos_cells)

@@ -138,6 +138,21 @@ TEST_CASE("analytic distances and bad input", "[geometry][distance]") {
     REQUIRE(half(Vec3d(0, 0, -1e6)) == Approx(1e6));
     REQUIRE(SphereDistance(Vec3d(1, 0, 0), 2)(Vec3d(4, 0, 0)) == Approx(-1.0));
     REQUIRE(BoxDistance(Vec3d(0.0), Vec3d(1.0))(Vec3d(2, 2, 0.5)) == Approx(-std::sqrt(2.0)));
+    const BoxDistance box(Vec3d(0.0), Vec3d(2, 3, 4));
+    REQUIRE(box.normal(Vec3d(0.1, 1.5, 2)) == Vec3d(-1, 0, 0));
+    REQUIRE(box.normal(Vec3d(1.9, 1.5, 2)) == Vec3d(1, 0, 0));
+    REQUIRE(box.normal(Vec3d(1, 0.05, 2)) == Vec3d(0, -1, 0));
+    REQUIRE(box.normal(Vec3d(1, 1.5, 3.99)) == Vec3d(0, 0, 1));
+    REQUIRE(box.normal(Vec3d(1, 1.5, 4.01)) == Vec3d(0, 0, 1));  // just outside: still the +z face
+    REQUIRE(box.normal(Vec3d(-0.02, 1.5, 2)) == Vec3d(-1, 0, 0));
+    Rng rng = Rng::from_key(104);
+    for (int i = 0; i < 1000; ++i) {  // the exit point of a ray from inside lies on the face normal() names
+        const Vec3d p(2 * rng.uniform<double>(), 3 * rng.uniform<double>(), 4 * rng.uniform<double>());
+        const Vec3d w = sample_uniform_sphere(rng.uniform2<double>());
+        const Vec3d x = p + box.exit_distance(p, w) * w, n = box.normal(x);
+        REQUIRE(glm::dot(n, w) > 0);
+        REQUIRE(std::abs(box(x)) < 1e-9);
+    }
     REQUIRE_THROWS_WITH(SphereDistance(Vec3d(0.0), -1.0), Catch::Contains("radius"));
     REQUIRE_THROWS_WITH(BoxDistance(Vec3d(0.0), Vec3d(1, 0, 1)), Catch::Contains("hi - lo"));
     TriangleMesh<double> open = box_mesh(Vec3d(0.0), Vec3d(1.0));

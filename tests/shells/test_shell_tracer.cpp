@@ -12,6 +12,7 @@
 #include "grainlight/geometry/aabb.hpp"
 #include "grainlight/geometry/distance.hpp"
 #include "grainlight/integrators/shell_tracer.hpp"
+#include "grainlight/packing/poisson.hpp"
 #include "grainlight/precompute/shell_builder.hpp"
 #include "grainlight/scene/lights.hpp"
 
@@ -472,4 +473,137 @@ TEST_CASE("Shell tracer continuation hook: light via the floor and back into the
     REQUIRE(std::abs(w_hook.mean() - e) <= 4 * std::hypot(w_hook.standard_error(), se) + 0.03 * e);
     // Without it the floor light is missing: resolved beyond the same tolerance.
     REQUIRE(e - w_plain.mean() > 4 * std::hypot(w_plain.standard_error(), se) + 0.03 * e);
+}
+
+TEST_CASE("Shell tracer face optics: shadow rays == counting escapes (both exit rules)", "[shells][tracer][face]") {
+    // A cube [-2.5, 2.5]^3 of HG g = 0.6, albedo 0.95 under the quad light of the first test case;
+    // every face is a glass-air interface with glass fraction q(|cos|) = 0.2, 0.5, 0.8 in three
+    // cells (Fresnel reflection back inside, refraction out, or straight out): the shadow rays'
+    // exit densities through the faces estimate what following the exits estimates.
+    const ShellTable table = continuous_table(0.95, 0.6, {0.5, 1.0, 1.5, 2.0}, 100000);
+    const BoxDistance cube(Vec3d(-2.5), Vec3d(2.5));
+    const QuadEnv env{Light<double, S1>::quad_light(
+        QuadShape<double>(Vec3d(-1.5, -1.5, 5.0), Vec3d(0, 3, 0), Vec3d(3, 0, 0)), S1(1.0))};
+    for (const ShellExitRule rule : {ShellExitRule::radial, ShellExitRule::table}) {
+        ShellTracerOptions on, off;
+        on.exit_rule = off.exit_rule = rule;
+        on.face = off.face = ShellFaceOptics{1.5, {0.2, 0.5, 0.8}};
+        off.nee = false;
+        const ShellTracer<S1, BoxDistance> t_nee(table, cube, on), t_hit(table, cube, off);
+        Welford w_nee, w_hit;
+        ShellTraceStats st;
+        for (int i = 0; i < 200000; ++i) {
+            Rng r1 = Rng::from_key(81, std::uint64_t(i));
+            Rng r2 = Rng::from_key(82, std::uint64_t(i));
+            w_nee.add(t_nee.trace(Vec3d(0.0), Vec3d(1, 0, 0), r1, env)[0]);
+            w_hit.add(t_hit.trace(Vec3d(0.0), Vec3d(1, 0, 0), r2, env, &st)[0]);
+        }
+        INFO((rule == ShellExitRule::table ? "table" : "radial")
+             << " rule: shadow rays " << w_nee.mean() << " +- " << w_nee.standard_error() << ", hits " << w_hit.mean()
+             << " +- " << w_hit.standard_error() << "; face reflections " << st.face_reflections);
+        REQUIRE(st.exits > 1000);
+        REQUIRE(st.straight_escapes > 1000);
+        REQUIRE(st.face_reflections > 1000);
+        REQUIRE(w_hit.mean() > 0.01);
+        REQUIRE(std::abs(w_nee.mean() - w_hit.mean()) <= 4 * std::hypot(w_nee.standard_error(), w_hit.standard_error()));
+    }
+}
+
+namespace {
+// A sky seen by paths leaving the volume: radiance (max(0, w.z))^8 (peaked at the zenith, so the
+// estimate depends on the directions the light leaves in); no light to sample (nee off).
+struct ZenithSky {
+    [[nodiscard]] LightSample<double, S1> sample_light(const Vec3d&, const Vec3d&) const noexcept { return {}; }
+    [[nodiscard]] bool visible(const Vec3d&, const Vec3d&, double) const noexcept { return true; }
+    [[nodiscard]] S1 escape(const Ray<double>& r) const noexcept { return S1(std::pow(std::max(0.0, r.d.z), 8.0)); }
+};
+}  // namespace
+
+TEST_CASE("Shell tracer face optics: a glass-walled continuous cube matches exact transport", "[shells][tracer][face]") {
+    // The cube of the hand-back test (side 16, HG g = 0.6, albedo 1, same table) with glass-air
+    // faces (eta 1.5: Fresnel reflection inside, Snell refraction out) under the zenith sky above.
+    // Truth: exact free flights, the faces sampled by Fresnel, the sky seen by every escape.
+    // Shells (table exit rule, escapes followed) with ShellFaceOptics::glass(1.5) vs without
+    // (every exit leaves straight, the old rule).
+    const ShellTable& table = cube_table();
+    const BoxDistance cube(Vec3d(0.0), Vec3d(16.0));
+    const ZenithSky env;
+    const HG hg(0.6);
+    const Vec3d x0(8.0, 8.0, 13.0), w0(0, 0, -1);
+    const auto exact = [&](Vec3d x, Vec3d w, Rng& rng) {
+        for (int k = 0; k < 1000000; ++k) {
+            const double t = sample_exponential(rng.uniform<double>(), 1.0);
+            const double tb = cube.exit_distance(x, w);
+            if (t >= tb) {
+                x += tb * w;
+                const Vec3d n = cube.normal(x);
+                const DielectricSample<double> ds = sample_dielectric(w, n, 1.5, rng.uniform<double>());
+                if (ds.refracted) return env.escape(Ray<double>(x, ds.w))[0];
+                w = ds.w;
+                x -= 1e-9 * n;
+                continue;
+            }
+            x += t * w;
+            w = hg.sample(w, Vec2d(rng.uniform<double>(), rng.uniform<double>())).w;
+        }
+        return 0.0;
+    };
+    ShellTracerOptions on, off;
+    on.min_scatter = off.min_scatter = 0;
+    on.nee = off.nee = false;
+    on.exit_rule = off.exit_rule = ShellExitRule::table;
+    on.face = ShellFaceOptics::glass(1.5);
+    const ShellTracer<S1, BoxDistance> t_on(table, cube, on), t_off(table, cube, off);
+    Welford w_exact, w_on, w_off;
+    ShellTraceStats st;
+    for (int i = 0; i < 100000; ++i) {
+        Rng r1 = Rng::from_key(91, std::uint64_t(i));
+        w_exact.add(exact(x0, w0, r1));
+        Rng r2 = Rng::from_key(92, std::uint64_t(i));
+        w_on.add(t_on.trace(x0, w0, r2, env, &st)[0]);
+        Rng r3 = Rng::from_key(93, std::uint64_t(i));
+        w_off.add(t_off.trace(x0, w0, r3, env)[0]);
+    }
+    const double e = w_exact.mean(), se = w_exact.standard_error();
+    INFO("exact " << e << " +- " << se << ", shells + face optics " << w_on.mean() << " +- " << w_on.standard_error()
+                  << " (" << 100 * (w_on.mean() / e - 1) << " %), without " << w_off.mean() << " +- "
+                  << w_off.standard_error() << " (" << 100 * (w_off.mean() / e - 1) << " %); reflections "
+                  << st.face_reflections);
+    REQUIRE(st.face_reflections > 10000);
+    // With face optics: within 4 sigma + 3 % (the table exit rule's own bias: -1.3 % in the hand-back test).
+    REQUIRE(std::abs(w_on.mean() - e) <= 4 * std::hypot(w_on.standard_error(), se) + 0.03 * e);
+    // Without: the faces' refraction and reflection are missing; resolved beyond the same tolerance.
+    REQUIRE(std::abs(w_off.mean() - e) > 4 * std::hypot(w_off.standard_error(), se) + 0.03 * e);
+}
+
+TEST_CASE("plane_crossing_glass_fraction and face optics bad input", "[shells][tracer][face][args]") {
+    // Index matched (eta = 1): straight lines, so the crossing fraction is the area fraction of the
+    // spheres in a plane, i.e. the volume fraction, in every |cos| cell. Glass (eta = 1.5): more.
+    Rng prng = Rng::from_key(5, 0xC0BEu);
+    const PeriodicTile rsa = random_sequential_addition(400, 0.3, prng, std::cbrt(400 * 4.0 / 3.0 * pi_v<double> / 0.3));
+    const double f = 400 * 4.0 / 3.0 * pi_v<double> * std::pow(rsa.radius(), 3) / std::pow(rsa.side(), 3);
+    const std::vector<double> q1 = plane_crossing_glass_fraction(rsa, 1.0, 4, 400, 400.0, 20.0, 3);
+    const std::vector<double> q15 = plane_crossing_glass_fraction(rsa, 1.5, 4, 400, 400.0, 20.0, 3);
+    REQUIRE(q1.size() == 4);
+    double m15 = 0;
+    for (int c = 0; c < 4; ++c) {
+        INFO("cell " << c << ": eta 1 " << q1[std::size_t(c)] << ", eta 1.5 " << q15[std::size_t(c)] << ", volume fraction " << f);
+        REQUIRE(std::abs(q1[std::size_t(c)] - f) < 0.03);
+        m15 += q15[std::size_t(c)] / 4;
+    }
+    REQUIRE(m15 > f + 0.03);
+    REQUIRE(m15 < 1.0);
+    REQUIRE_THROWS_WITH(plane_crossing_glass_fraction(rsa, 1.5, 0, 10, 10.0, 5.0, 1), Catch::Contains("cells"));
+    REQUIRE_THROWS_WITH(plane_crossing_glass_fraction(rsa, 1.5, 4, 10, -1.0, 5.0, 1), Catch::Contains("path_length"));
+    const ShellTable table = continuous_table(0.9, 0.0, {0.5, 1.0}, 20000);
+    ShellTracerOptions o;
+    o.face = ShellFaceOptics{1.5, {0.5, 1.5}};
+    REQUIRE_THROWS_WITH((ShellTracer<S1, BoxDistance>(table, BoxDistance(Vec3d(-3.0), Vec3d(3.0)), o)),
+                        Catch::Contains("face.q"));
+    o.face = ShellFaceOptics{-1.0, {0.5}};
+    REQUIRE_THROWS_WITH((ShellTracer<S1, BoxDistance>(table, BoxDistance(Vec3d(-3.0), Vec3d(3.0)), o)),
+                        Catch::Contains("face.eta"));
+    o.face = ShellFaceOptics::glass(1.5);  // a ball has no face normal
+    REQUIRE_THROWS_WITH((ShellTracer<S1, SphereDistance>(table, SphereDistance(Vec3d(0.0), 3.0), o)),
+                        Catch::Contains("face.q.size()"));
 }

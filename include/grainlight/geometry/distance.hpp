@@ -102,6 +102,19 @@ struct BoxDistance {
         }
         return std::max(0.0, t);
     }
+    /// Outward unit normal of the face nearest to p (the face a path at p leaves through, for p on
+    /// or near the surface; ties go to the lowest axis, the lo face before the hi face).
+    [[nodiscard]] Vec3d normal(const Vec3d& p) const noexcept {
+        int best = 0;
+        double dmin = std::numeric_limits<double>::infinity(), sgn = 1;
+        for (int a = 0; a < 3; ++a) {
+            if (std::abs(p[a] - lo[a]) < dmin) { dmin = std::abs(p[a] - lo[a]); best = a; sgn = -1; }
+            if (std::abs(hi[a] - p[a]) < dmin) { dmin = std::abs(hi[a] - p[a]); best = a; sgn = 1; }
+        }
+        Vec3d n(0.0);
+        n[best] = sgn;
+        return n;
+    }
 };
 
 /// Signed distance to the faces of the slab -thickness < z < 0 (thickness > 0, may be +inf:

@@ -38,6 +38,7 @@
 #include "grainlight/media/concepts.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/media/shell.hpp"
+#include "grainlight/optics/fresnel.hpp"
 #include "grainlight/phase/henyey_greenstein.hpp"
 #include "grainlight/scene/concepts.hpp"
 #include "grainlight/integrators/slab.hpp"
@@ -204,6 +205,37 @@ enum class ShellExitRule : std::uint8_t {
     table    ///< along the exit direction omega' sampled from T_r at y (leaving from y)
 };
 
+/// Optics of the volume's faces where a shell step leaves the volume (ShellTracer::trace). In the
+/// explicit medium a face plane cuts through the spheres: a path crossing it is inside glass with
+/// probability q(|cos theta|) (cos theta = direction . outward face normal; for a packing measure
+/// it with plane_crossing_glass_fraction, precompute/shell_builder.hpp), and there it meets the
+/// glass-air interface: Fresnel reflection back into the volume (mirrored about the face) or
+/// refraction out (Snell, relative index `eta`). Otherwise (probability 1 - q) it leaves straight.
+/// Empty `q`: off (Moon07's rule: every exit leaves straight). Needs a Volume with
+/// `Vec3d normal(const Vec3d&)` (the outward normal of the face nearest to a point, e.g. BoxDistance);
+/// the face of a step is the face nearest to the step's start point (so exits, straight escapes
+/// and both shadow rays use the same face and stay one consistent estimator).
+struct ShellFaceOptics {
+    double eta = 1.5;       ///< index of the grains over that outside the volume (> 0, finite)
+    std::vector<double> q;  ///< glass fraction in equal cells of |cos theta| over [0, 1] (each in [0, 1]; empty: off)
+    /// True if face optics is on (q not empty).
+    [[nodiscard]] bool enabled() const noexcept { return !q.empty(); }
+    /// q(|c|): the probability that a crossing at direction cosine c is inside glass.
+    [[nodiscard]] double glass_fraction(double c) const noexcept {
+        const std::size_t n = q.size();
+        const double a = std::min(1.0, std::abs(c));
+        return q[std::min(n - 1, std::size_t(a * double(n)))];
+    }
+    /// Glass faces everywhere (q = 1): a continuous medium in a glass-walled container.
+    [[nodiscard]] static ShellFaceOptics glass(double eta) { return ShellFaceOptics{eta, {1.0}}; }
+};
+
+/// True if `Volume` gives the outward face normal that ShellFaceOptics needs.
+template <class Volume>
+concept VolumeWithNormal = requires(const Volume& v, const Vec3d& p) {
+    { v.normal(p) } -> std::convertible_to<Vec3d>;
+};
+
 /// Options of the Fig. 6 shell tracer.
 struct ShellTracerOptions {
     int min_scatter = 2;        ///< explicit events before a path may switch to shells (switch rule)
@@ -216,6 +248,8 @@ struct ShellTracerOptions {
     double hand_back_depth = -1;
     /// Exit rule of trace() for sampled exit points outside the volume (Moon07's: radial).
     ShellExitRule exit_rule = ShellExitRule::radial;
+    /// Glass-air optics of the faces where trace() leaves the volume (default off).
+    ShellFaceOptics face{};
 };
 
 /// Where the shell-traced part of a path ended (ShellTracer::trace_to_boundary).
@@ -240,7 +274,9 @@ struct ShellTraceStats {
     /// Shell steps whose exit point fell outside the volume (ShellStepKind::exited).
     /// @var straight_escapes
     /// Shell steps that left the volume unscattered (ShellStepKind::escaped).
-    std::uint64_t paths = 0, steps = 0, scattered = 0, exits = 0, straight_escapes = 0;
+    /// @var face_reflections
+    /// Exits and straight escapes Fresnel-reflected back inside by a glass face (ShellFaceOptics).
+    std::uint64_t paths = 0, steps = 0, scattered = 0, exits = 0, straight_escapes = 0, face_reflections = 0;
 };
 
 /// Moon07 Fig. 6 (advanceRayUsingShellsWithDirect) as an integrator for the high-order part of a
@@ -285,10 +321,19 @@ public:
         check_argument(!std::isnan(opt.switch_depth), "ShellTracer", "switch_depth", opt.switch_depth,
                        "a number (< 0: r_0 of the table)");
         switch_depth_ = opt.switch_depth < 0 ? shells_.table().radii.front() : opt.switch_depth;
+        eps_ = 1e-9 * shells_.table().radii.front();
         const double r0 = shells_.table().radii.front();
         check_argument(std::isnan(opt.hand_back_depth) ? false : (opt.hand_back_depth < 0 || opt.hand_back_depth >= r0),
                        "ShellTracer", "hand_back_depth", opt.hand_back_depth,
                        "< 0 (Moon07 exit rule) or >= r_0 = " + std::to_string(r0));
+        if (opt.face.enabled()) {
+            check_argument(VolumeWithNormal<Volume>, "ShellTracer", "face.q.size()", opt.face.q.size(),
+                           "0 (face optics off) for a volume without normal()");
+            check_argument(std::isfinite(opt.face.eta) && opt.face.eta > 0, "ShellTracer", "face.eta", opt.face.eta,
+                           "finite, > 0");
+            for (const double v : opt.face.q)
+                check_argument(v >= 0 && v <= 1, "ShellTracer", "face.q", v, "[0, 1] in every cell");
+        }
     }
 
     /// Hand-back mode (hand_back_depth h = max(options().hand_back_depth, r_0)): Fig. 5 shell steps from x (inside, at
@@ -359,7 +404,9 @@ public:
                 // first shadow ray: leave through a sampled exit point outside, along y - x
                 const LightSample<double, S> ls = env.sample_light(x, Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()));
                 if (ls) {
-                    const double dens = shells_.exit_escape_density(x, omega, t_b, ls.w);
+                    const double dens = face_density(x, ls.w, [&](const Vec3d& w) {
+                        return shells_.exit_escape_density(x, omega, t_b, w);
+                    });
                     if (dens > 0 && env.visible(x, ls.w, ls.dist)) L += ls.L * (beta * dens / ls.pdf);
                 }
             } else if (opt_.nee) {
@@ -375,12 +422,14 @@ public:
                     const LightSample<double, S> ls = env.sample_light(y, Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()));
                     if (ls && volume_(y) < 0.0) {
                         const Vec3d n = glm::normalize(y - x);
-                        const double c = glm::dot(ls.w, n);
                         const double pu = t_b < r ? shells_.attenuation(t_b) : shells_.table().p_unscattered[std::size_t(i)];
                         const double ps = shells_.table().p_scattered[std::size_t(i)], pa = shells_.table().p_absorbed[std::size_t(i)];
-                        if (c > 0 && ps > 0) {
-                            const double dens = (1 - pu) * ps / (ps + pa) *
-                                                shells_.exit_direction_density(i, shell_coords(x, omega, y, ls.w)) * c;
+                        if (ps > 0) {
+                            const double k_s = (1 - pu) * ps / (ps + pa);
+                            const double dens = face_density(x, ls.w, [&](const Vec3d& w) {
+                                const double c = glm::dot(w, n);
+                                return c > 0 ? k_s * shells_.exit_direction_density(i, shell_coords(x, omega, y, w)) * c : 0.0;
+                            });
                             if (dens > 0 && env.visible(y, ls.w, ls.dist)) L += ls.L * (beta * dens / ls.pdf);
                         }
                     }
@@ -396,18 +445,37 @@ public:
                     return L;
                 case ShellStepKind::escaped: {
                     if (stats) ++stats->straight_escapes;
+                    Vec3d w_out = omega;
+                    if (face_event(x, w_out, rng) == FaceEvent::reflected) {
+                        // Fresnel reflection at a glass face: back inside from the face point
+                        if (stats) ++stats->face_reflections;
+                        x = st.p - eps_ * omega;
+                        omega = w_out;
+                        dir_from_scatter = false;  // no shadow ray estimated this direction's escape
+                        continue;
+                    }
                     const bool counted = opt_.nee && dir_from_scatter;  // the second shadow ray estimated it
                     if constexpr (ShellContinuationEnv<Env, S>) {
-                        L += env.continue_outside(Ray<double>(st.p, omega), rng, counted) * beta;
+                        L += env.continue_outside(Ray<double>(st.p, w_out), rng, counted) * beta;
                     } else {
-                        if (!counted) L += env.escape(Ray<double>(st.p, omega)) * beta;
+                        if (!counted) L += env.escape(Ray<double>(st.p, w_out)) * beta;
                     }
                     return L;
                 }
                 case ShellStepKind::exited: {
                     if (stats) ++stats->exits;
-                    const Ray<double> out(st.p, opt_.exit_rule == ShellExitRule::table ? st.w_table : st.w);
+                    Vec3d w_out = opt_.exit_rule == ShellExitRule::table ? st.w_table : st.w;
                     beta *= st.weight;  // expected survival of the shell's events (1 - P_a share)
+                    if (face_event(x, w_out, rng) == FaceEvent::reflected) {
+                        // Fresnel reflection at a glass face: the exit point mirrored back inside
+                        if (stats) ++stats->face_reflections;
+                        x = mirrored_inside(x, st.p);
+                        omega = w_out;
+                        dir_from_scatter = false;
+                        if (!(beta > 0)) return L;
+                        continue;
+                    }
+                    const Ray<double> out(st.p, w_out);
                     if constexpr (ShellContinuationEnv<Env, S>) {
                         // the first shadow ray estimated the emission seen along `out` (with nee)
                         if (beta > 0) L += env.continue_outside(out, rng, opt_.nee) * beta;
@@ -422,8 +490,10 @@ public:
                     if (opt_.nee) {  // second shadow ray: continue along w_l and leave unscattered
                         const LightSample<double, S> ls = env.sample_light(st.p, Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()));
                         if (ls) {
-                            const double d_l = volume_.exit_distance(st.p, ls.w);
-                            const double dens = shells_.straight_escape_density(st.shell, x, omega, st.p, ls.w, d_l);
+                            const double dens = face_density(st.p, ls.w, [&](const Vec3d& w) {
+                                return shells_.straight_escape_density(st.shell, x, omega, st.p, w,
+                                                                       volume_.exit_distance(st.p, w));
+                            });
                             if (dens > 0 && env.visible(st.p, ls.w, ls.dist)) L += ls.L * (beta * dens / ls.pdf);
                         }
                     }
@@ -439,10 +509,80 @@ public:
     }
 
 private:
+    enum class FaceEvent : std::uint8_t { straight, refracted, reflected };
+
+    /// Face optics on, and the outward normal of the face of a step from x.
+    [[nodiscard]] bool face_normal(const Vec3d& x, Vec3d& n) const noexcept {
+        if constexpr (VolumeWithNormal<Volume>) {
+            if (!opt_.face.enabled()) return false;
+            n = volume_.normal(x);
+            return true;
+        } else {
+            (void)x;
+            (void)n;
+            return false;
+        }
+    }
+
+    /// The face a step from x leaves through acting on the leaving direction w (unit, in the
+    /// medium): with probability q(w . n) the crossing is inside glass and w is Fresnel-reflected
+    /// or refracted (sample_dielectric); else (or with face optics off, or w . n <= 0) unchanged.
+    [[nodiscard]] FaceEvent face_event(const Vec3d& x, Vec3d& w, Rng& rng) const noexcept {
+        Vec3d n;
+        if (!face_normal(x, n)) return FaceEvent::straight;
+        const double c = glm::dot(w, n);
+        if (!(c > 0)) return FaceEvent::straight;
+        const double u_glass = rng.uniform<double>(), u_fresnel = rng.uniform<double>();
+        if (!(u_glass < opt_.face.glass_fraction(c))) return FaceEvent::straight;
+        const DielectricSample<double> ds = sample_dielectric(w, n, opt_.face.eta, u_fresnel);
+        w = ds.w;
+        return ds.refracted ? FaceEvent::refracted : FaceEvent::reflected;
+    }
+
+    /// Density over the direction w_o a path leaves the volume in (outside the face), given the
+    /// density `dens(w)` over the in-medium direction w it reaches the face of a step from x with:
+    /// (1 - q(c_o)) dens(w_o) + q(c_i) (1 - F(c_i)) dens(w_i) |d omega_i / d omega_o|, w_i the
+    /// in-glass direction Snell refracts to w_o and |d omega_i / d omega_o| = c_o / (eta^2 c_i).
+    /// The estimate face_event() samples, for the shadow rays.
+    template <class Dens>
+    [[nodiscard]] double face_density(const Vec3d& x, const Vec3d& w_o, const Dens& dens) const noexcept {
+        Vec3d n;
+        if (!face_normal(x, n)) return dens(w_o);
+        const double c_o = glm::dot(w_o, n);
+        if (!(c_o > 0)) return dens(w_o);
+        double d = (1 - opt_.face.glass_fraction(c_o)) * dens(w_o);
+        Vec3d wt;
+        if (refract(w_o, n, opt_.face.eta, wt)) {  // from outside into glass: always refracts
+            const Vec3d w_i = -glm::normalize(wt);
+            const double c_i = glm::dot(w_i, n);
+            if (c_i > 0) {
+                const double eta = opt_.face.eta;
+                const double t = 1 - fresnel_dielectric(c_i, 1 / eta);
+                const double q = opt_.face.glass_fraction(c_i);
+                if (q > 0 && t > 0) d += q * t * c_o / (eta * eta * c_i) * dens(w_i);
+            }
+        }
+        return d;
+    }
+
+    /// A sampled exit point y of a step from x, outside the volume, reflected about the plane of
+    /// the step's face (the face at distance volume_(x) along its normal); if that lands outside
+    /// (near an edge), the point where the chord x -> y leaves the volume, just inside.
+    [[nodiscard]] Vec3d mirrored_inside(const Vec3d& x, const Vec3d& y) const noexcept {
+        Vec3d n(0.0);
+        (void)face_normal(x, n);
+        const double beyond = glm::dot(y - x, n) - volume_(x);
+        const Vec3d m = y - 2 * std::max(0.0, beyond) * n;
+        if (!(volume_(m) < 0.0)) return m;
+        const Vec3d u = glm::normalize(y - x);
+        return x + std::max(0.0, volume_.exit_distance(x, u) - eps_) * u;
+    }
+
     Shells shells_;
     Volume volume_;
     ShellTracerOptions opt_;
     double switch_depth_ = 0;
+    double eps_ = 1e-9;  ///< nudge off the surface (1e-9 r_0)
 };
 
 

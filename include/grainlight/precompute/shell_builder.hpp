@@ -350,6 +350,67 @@ private:
     int max_events_;
 };
 
+/// Glass fraction of plane crossings in a packing of dielectric spheres (ShellFaceOptics::q of the
+/// shell tracer): the probability q(|cos theta|) that a path of the medium crossing a plane at
+/// direction cosine cos theta does so inside a sphere, in `cells` equal cells of |cos theta| over
+/// [0, 1]. Measured on the paths themselves (SpherePackingShellSource: Fresnel reflection and
+/// Snell refraction at every sphere, no absorption, burn-in `burn_in`), `paths` paths of path
+/// length `path_length` each, counting every crossing of the planes x, y, z = k R / 2 (R the
+/// sphere radius): the crossing-weighted fraction, which differs from the area fraction of glass
+/// in a plane (= the volume fraction) because light travels differently inside the spheres.
+/// Deterministic in `seed`. Throws grainlight::invalid_argument naming the parameter for cells
+/// outside [1, 1024], paths < 1 or a non-finite or non-positive path_length / burn_in; a cell
+/// without crossings gets the mean over all crossings.
+[[nodiscard]] inline std::vector<double> plane_crossing_glass_fraction(const PeriodicTile& tile, double eta, int cells,
+                                                                       std::uint64_t paths, double path_length,
+                                                                       double burn_in, std::uint64_t seed) {
+    constexpr const char* where = "plane_crossing_glass_fraction";
+    check_argument(cells >= 1 && cells <= 1024, where, "cells", cells, "[1, 1024]");
+    check_argument(paths >= 1, where, "paths", paths, ">= 1");
+    check_argument(std::isfinite(path_length) && path_length > 0, where, "path_length", path_length, "finite, > 0");
+    const SpherePackingShellSource src(tile, eta, 0.0, burn_in);
+    const double spacing = 0.5 * tile.radius();
+    std::vector<double> glass(std::size_t(cells), 0.0), all(std::size_t(cells), 0.0);
+    struct Rec {
+        const PeriodicTile* tile;
+        double spacing, left;
+        int cells;
+        std::vector<double>*glass, *all;
+        void begin(const Vec3d&, const Vec3d&) noexcept {}
+        void absorbed() noexcept {}
+        bool segment(const Vec3d& p, const Vec3d& d, double t, bool) noexcept {
+            if (!std::isfinite(t) || !(left > 0)) return false;
+            t = std::min(t, left);
+            left -= t;
+            const bool in = tile->sphere_containing(p + 0.5 * t * d).has_value();
+            const Vec3d q = p + t * d;
+            for (int a = 0; a < 3; ++a) {
+                const double k = std::abs(std::floor(q[a] / spacing) - std::floor(p[a] / spacing));
+                if (k == 0) continue;
+                const std::size_t c = std::min(std::size_t(cells - 1), std::size_t(std::abs(d[a]) * double(cells)));
+                (*all)[c] += k;
+                if (in) (*glass)[c] += k;
+            }
+            return left > 0;
+        }
+    };
+    for (std::uint64_t i = 0; i < paths; ++i) {
+        Rng rng = Rng::from_key(seed, i, 0x51A9Eu);
+        Rec rec{&tile, spacing, path_length, cells, &glass, &all};
+        src.trace(rng, rec);
+    }
+    double g_sum = 0, a_sum = 0;
+    for (int c = 0; c < cells; ++c) {
+        g_sum += glass[std::size_t(c)];
+        a_sum += all[std::size_t(c)];
+    }
+    const double mean = a_sum > 0 ? g_sum / a_sum : 0.0;
+    std::vector<double> q(std::size_t(cells), mean);
+    for (std::size_t c = 0; c < q.size(); ++c)
+        if (all[c] > 0) q[c] = glass[c] / all[c];
+    return q;
+}
+
 /// Path source: the grains of a procedural granular aggregate (Meng15 grain aggregates,
 /// traversal/aggregate.hpp `GranularAggregate`: any exemplar mix, mesh or analytic grains, any
 /// GrainMaterial), traced explicitly as EPT does it (integrators/ept.hpp: Algorithm 1 traversal to
