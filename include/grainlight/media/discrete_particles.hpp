@@ -379,30 +379,8 @@ public:
         } else {
             choose_member(ray, t_max, tau_star, chosen, s_chosen);
         }
-        if (chosen < 0) {  // round-off: no member reached tau*; treat as escape of this sample
-            it.kind = EventKind::escape;
-            it.t = t_max;
-            it.p = ray(t_max);
-            it.weight = S(F(0));
-            return it;
-        }
-        const std::uint32_t i = std::uint32_t(chosen);
-        const CloudParticle& cp = cloud()[i];
-        it.kind = EventKind::scatter;
-        it.t = F(s_chosen);
-        it.p = Vec3<F>(cp.x, cp.y, cp.z);
-        const auto ps = phase_of(i).sample(ray.d, rng.template uniform2<F>());
-        if (!ps) {
-            it.kind = EventKind::absorb;
-            it.weight = S(F(0));
-            return it;
-        }
-        it.has_direction = true;
-        it.w = ps.w;
-        it.direction_pdf = ps.pdf;
-        it.nee = NeeKind::none;  // generic integrators: no phase() to connect with
-        it.weight = S(P / q * albedo(i)) * ps.weight;
-        return it;
+        // round-off (no member reached tau*): an escape of weight 0 for this sample
+        return collision_event(ray, t_max, chosen, s_chosen, P / q, F(0), rng);
     }
 
     /// Memory of the cloud + grid [bytes].
@@ -426,22 +404,30 @@ private:
     /// probability 1 - e^{-C_t,i / A} given the path reached it: the same law as the forced
     /// sampler's with q = P). Event weight = the member's albedo; escape weight 1.
     [[nodiscard]] Interaction<F, S> sample_analog(const Ray<F>& ray, F t_max, Rng& rng) const noexcept {
-        Interaction<F, S> it;
         const F tau_star = -std::log1p(-std::min(rng.uniform<F>(), F(1) - F(1e-7)));
         std::int64_t chosen = -1;
         float s_chosen = 0;
         choose_member(ray, t_max, tau_star, chosen, s_chosen, false);
+        return collision_event(ray, t_max, chosen, s_chosen, F(1), F(1), rng);
+    }
+
+    /// The event of a free flight that chose member `chosen` at axis parameter s (weight scale
+    /// times its albedo and the phase sample's weight; the direction is sampled from its phase
+    /// table), or, for chosen < 0, the escape at t_max with escape_weight.
+    [[nodiscard]] Interaction<F, S> collision_event(const Ray<F>& ray, F t_max, std::int64_t chosen, float s, F scale,
+                                                    F escape_weight, Rng& rng) const noexcept {
+        Interaction<F, S> it;
         if (chosen < 0) {
             it.kind = EventKind::escape;
             it.t = t_max;
             it.p = ray(t_max);
-            it.weight = S(F(1));
+            it.weight = S(escape_weight);
             return it;
         }
         const std::uint32_t i = std::uint32_t(chosen);
         const CloudParticle& cp = cloud()[i];
         it.kind = EventKind::scatter;
-        it.t = F(s_chosen);
+        it.t = F(s);
         it.p = Vec3<F>(cp.x, cp.y, cp.z);
         const auto ps = phase_of(i).sample(ray.d, rng.template uniform2<F>());
         if (!ps) {
@@ -452,8 +438,8 @@ private:
         it.has_direction = true;
         it.w = ps.w;
         it.direction_pdf = ps.pdf;
-        it.nee = NeeKind::none;
-        it.weight = S(albedo(i)) * ps.weight;
+        it.nee = NeeKind::none;  // generic integrators: no phase() to connect with
+        it.weight = S(scale * albedo(i)) * ps.weight;
         return it;
     }
 
