@@ -47,6 +47,19 @@ struct QuadEnv {
     }
 };
 
+// n paths from the centre along +x through each tracer (keys key_nee / key_hit): the shadow-ray
+// estimator's and the escape-hit estimator's tallies; st collects the escape-hit tracer's stats.
+template <class Tracer>
+void trace_nee_and_hits(const Tracer& t_nee, const Tracer& t_hit, const QuadEnv& env, std::uint64_t key_nee,
+                        std::uint64_t key_hit, Welford& w_nee, Welford& w_hit, ShellTraceStats& st, int n = 200000) {
+    for (int i = 0; i < n; ++i) {
+        Rng r1 = Rng::from_key(key_nee, std::uint64_t(i));
+        Rng r2 = Rng::from_key(key_hit, std::uint64_t(i));
+        w_nee.add(t_nee.trace(Vec3d(0.0), Vec3d(1, 0, 0), r1, env)[0]);
+        w_hit.add(t_hit.trace(Vec3d(0.0), Vec3d(1, 0, 0), r2, env, &st)[0]);
+    }
+}
+
 }  // namespace
 
 TEST_CASE("Shell tracer: Fig. 6 shadow rays == counting escapes that hit the light", "[shells][tracer]") {
@@ -285,12 +298,7 @@ TEST_CASE("Shell tracer, table exit rule: shadow rays == counting escapes that h
     const ShellTracer<S1, SphereDistance> t_nee(table, ball, on), t_hit(table, ball, off);
     Welford w_nee, w_hit;
     ShellTraceStats st;
-    for (int i = 0; i < 200000; ++i) {
-        Rng r1 = Rng::from_key(61, std::uint64_t(i));
-        Rng r2 = Rng::from_key(62, std::uint64_t(i));
-        w_nee.add(t_nee.trace(Vec3d(0.0), Vec3d(1, 0, 0), r1, env)[0]);
-        w_hit.add(t_hit.trace(Vec3d(0.0), Vec3d(1, 0, 0), r2, env, &st)[0]);
-    }
+    trace_nee_and_hits(t_nee, t_hit, env, 61, 62, w_nee, w_hit, st);
     INFO("shadow rays " << w_nee.mean() << " +- " << w_nee.standard_error() << ", hits " << w_hit.mean() << " +- "
                         << w_hit.standard_error());
     REQUIRE(st.exits > 1000);
@@ -492,12 +500,7 @@ TEST_CASE("Shell tracer face optics: shadow rays == counting escapes (both exit 
         const ShellTracer<S1, BoxDistance> t_nee(table, cube, on), t_hit(table, cube, off);
         Welford w_nee, w_hit;
         ShellTraceStats st;
-        for (int i = 0; i < 200000; ++i) {
-            Rng r1 = Rng::from_key(81, std::uint64_t(i));
-            Rng r2 = Rng::from_key(82, std::uint64_t(i));
-            w_nee.add(t_nee.trace(Vec3d(0.0), Vec3d(1, 0, 0), r1, env)[0]);
-            w_hit.add(t_hit.trace(Vec3d(0.0), Vec3d(1, 0, 0), r2, env, &st)[0]);
-        }
+        trace_nee_and_hits(t_nee, t_hit, env, 81, 82, w_nee, w_hit, st);
         INFO((rule == ShellExitRule::table ? "table" : "radial")
              << " rule: shadow rays " << w_nee.mean() << " +- " << w_nee.standard_error() << ", hits " << w_hit.mean()
              << " +- " << w_hit.standard_error() << "; face reflections " << st.face_reflections);
