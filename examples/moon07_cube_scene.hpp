@@ -710,7 +710,8 @@ inline void add_comparison_json(gl_examples::Json& j, const ShellVsPt& st, doubl
 inline void add_tracer_json(gl_examples::Json& j, const gl::ShellTraceStats& ts, double high_samples) {
     j.num("switched_fraction", double(ts.paths) / high_samples)
         .num("shell_steps_per_switched_path", ts.paths ? double(ts.steps) / double(ts.paths) : 0.0)
-        .num("exit_fraction", ts.paths ? double(ts.exits) / double(ts.paths) : 0.0);
+        .num("exit_fraction", ts.paths ? double(ts.exits) / double(ts.paths) : 0.0)
+        .num("face_reflections_per_switched_path", ts.paths ? double(ts.face_reflections) / double(ts.paths) : 0.0);
 }
 /// The shell table's keys (build or load CPU seconds, cached, NMF error, raw and factored bytes).
 inline void add_table_json(gl_examples::Json& j, const CachedShellTable& ct) {
@@ -881,16 +882,18 @@ ShellPasses render_shell_passes(const gl::PinholeCamera<double>& cam, int spp_pt
         p.ts.scattered += t.scattered;
         p.ts.exits += t.exits;
         p.ts.straight_escapes += t.straight_escapes;
+        p.ts.face_reflections += t.face_reflections;
     }
     if (hooks.ex) {  // every rank's tallies, summed on rank 0 (exact as doubles below 2^53)
         const std::vector<double> all = hooks.ex->mpi().sum_to_root(
             {double(p.ts.paths), double(p.ts.steps), double(p.ts.scattered), double(p.ts.exits),
-             double(p.ts.straight_escapes)});
+             double(p.ts.straight_escapes), double(p.ts.face_reflections)});
         p.ts.paths = std::uint64_t(all[0]);
         p.ts.steps = std::uint64_t(all[1]);
         p.ts.scattered = std::uint64_t(all[2]);
         p.ts.exits = std::uint64_t(all[3]);
         p.ts.straight_escapes = std::uint64_t(all[4]);
+        p.ts.face_reflections = std::uint64_t(all[5]);
     }
     return p;
 }
