@@ -289,8 +289,12 @@ template <BoundaryShape Shape>
     for (double z : zs) {
         sum += z;
         sum2 += z * z;
-        const auto b = std::size_t(z / z_max * bins);
-        if (z >= 0 && b < st.hist.size()) st.hist[b] += 1.0;
+        // Negative (teleported back) or beyond z_max: no bin. Cast only inside [0, z_max), where it
+        // is defined (a negative or huge double cast to size_t is undefined behaviour).
+        if (z >= 0 && z < z_max) {
+            const auto b = std::min(std::size_t(z / z_max * bins), st.hist.size() - 1);
+            st.hist[b] += 1.0;
+        }
     }
     st.samples = zs.size();
     if (st.samples > 0) {
