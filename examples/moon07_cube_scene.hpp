@@ -876,24 +876,17 @@ ShellPasses render_shell_passes(const gl::PinholeCamera<double>& cam, int spp_pt
                               return radiance(r, rng, Mode::high, &tstats[std::size_t(tid)]);
                           },
                           hooks);
-    for (const auto& t : tstats) {
-        p.ts.paths += t.paths;
-        p.ts.steps += t.steps;
-        p.ts.scattered += t.scattered;
-        p.ts.exits += t.exits;
-        p.ts.straight_escapes += t.straight_escapes;
-        p.ts.face_reflections += t.face_reflections;
-    }
+    // Every counter of ShellTraceStats, listed once: summed over threads, then over ranks.
+    using TS = gl::ShellTraceStats;
+    constexpr std::uint64_t TS::* counters[] = {&TS::paths, &TS::steps, &TS::scattered, &TS::exits,
+                                                &TS::straight_escapes, &TS::face_reflections};
+    for (const auto& t : tstats)
+        for (auto c : counters) p.ts.*c += t.*c;
     if (hooks.ex) {  // every rank's tallies, summed on rank 0 (exact as doubles below 2^53)
-        const std::vector<double> all = hooks.ex->mpi().sum_to_root(
-            {double(p.ts.paths), double(p.ts.steps), double(p.ts.scattered), double(p.ts.exits),
-             double(p.ts.straight_escapes), double(p.ts.face_reflections)});
-        p.ts.paths = std::uint64_t(all[0]);
-        p.ts.steps = std::uint64_t(all[1]);
-        p.ts.scattered = std::uint64_t(all[2]);
-        p.ts.exits = std::uint64_t(all[3]);
-        p.ts.straight_escapes = std::uint64_t(all[4]);
-        p.ts.face_reflections = std::uint64_t(all[5]);
+        std::vector<double> mine;
+        for (auto c : counters) mine.push_back(double(p.ts.*c));
+        const std::vector<double> all = hooks.ex->mpi().sum_to_root(mine);
+        for (std::size_t i = 0; i < std::size(counters); ++i) p.ts.*counters[i] = std::uint64_t(all[i]);
     }
     return p;
 }
