@@ -99,6 +99,7 @@ int main(int argc, char** argv) {
         struct Point {
             std::array<int, 3> res{};
             double ppv = 0, refs_per_particle = 0, build_seconds = 0, cpu_seconds = 1e300, mean = 0, query_ns = 1e300;
+            double steps_per_ray = 0, tests_per_ray = 0, members = 0;
             std::size_t memory = 0;
         };
         std::vector<Point> pts(ppv_target.size());
@@ -152,6 +153,44 @@ int main(int argc, char** argv) {
                     pts[k].query_ns = std::min(pts[k].query_ns, qs * 1e9 / double(rays));
                     if (sink == -1) std::printf(" ");
                 }
+                // Work count (deterministic, pass 0): the same kind of rays walked over the whole slab
+                // chord through the grid alone. DDA steps (cells crossed, empty ones included), particle
+                // references tested, and cylinder members found, which must not depend on the grid.
+                if (pass == 0) {
+                    const auto& rs = grid->resolution();
+                    auto cell_xyz = [&](const gl::Vec3f& p, std::int64_t out[3]) {
+                        const std::int64_t c = grid->cell_of(p);
+                        out[0] = c % rs[0];
+                        out[1] = (c / rs[0]) % rs[1];
+                        out[2] = c / (std::int64_t(rs[0]) * rs[1]);
+                    };
+                    double steps = 0, tests = 0, members = 0;
+                    const std::uint64_t work_rays = std::min<std::uint64_t>(rays, 20000);
+                    for (std::uint64_t r = 0; r < work_rays; ++r) {
+                        gl::Rng rng = gl::Rng::from_key(ex.seed(), 11, r);
+                        const gl::Vec3f o(float(lo.x + (hi.x - lo.x) * rng.uniform<double>()),
+                                          float(lo.y + (hi.y - lo.y) * rng.uniform<double>()),
+                                          float(lo.z + (hi.z - lo.z) * rng.uniform<double>()));
+                        const gl::Vec3f d = gl::sample_uniform_sphere(rng.uniform2<float>());
+                        float t0 = 0, t1 = 1e30f;
+                        if (!gl::clip_to_box(o, d, gl::Vec3f(lo), gl::Vec3f(hi), t0, t1)) continue;
+                        std::int64_t a[3], e[3];
+                        cell_xyz(o, a);
+                        cell_xyz(o + t1 * d, e);
+                        steps += 1.0 + double(std::abs(e[0] - a[0]) + std::abs(e[1] - a[1]) + std::abs(e[2] - a[2]));
+                        grid->walk_voxels(o, d, 0.0f, t1, [&](std::span<const std::uint32_t> refs, float, float) {
+                            tests += double(refs.size());
+                            return true;
+                        });
+                        grid->for_each_in_cylinder(o, d, 0.0f, t1, float(r_c), [&](std::uint32_t, float, float) {
+                            members += 1;
+                            return true;
+                        });
+                    }
+                    pts[k].steps_per_ray = steps / double(work_rays);
+                    pts[k].tests_per_ray = tests / double(work_rays);
+                    pts[k].members = members;
+                }
                 guo21_mpi::RankClock clock;
                 const gl::Image img = guo21_mpi::render_image(
                     ex, opt, "ppv" + std::to_string(k) + ".pass" + std::to_string(pass),
@@ -185,7 +224,7 @@ int main(int argc, char** argv) {
                               "cpu_seconds", "query_ns_per_ray", "build_seconds", "grid_mb", "mean_radiance"});
         std::printf("  %10s %16s %10s %12s %12s %10s %10s\n", "ppv", "resolution", "refs/part", "render CPU s", "query ns/ray",
                     "build s", "grid MB");
-        std::vector<double> v_ppv, v_rx, v_ry, v_rz, v_sec, v_q;
+        std::vector<double> v_ppv, v_rx, v_ry, v_rz, v_sec, v_q, v_steps, v_tests;
         for (const auto& p : pts) {
             std::printf("  %10.3f %5d x%4d x%4d %10.2f %12.2f %12.0f %10.2f %10.1f%s%s\n", p.ppv, p.res[0], p.res[1], p.res[2],
                         p.refs_per_particle, p.cpu_seconds, p.query_ns, p.build_seconds, double(p.memory) / 1048576.0,
@@ -193,6 +232,8 @@ int main(int argc, char** argv) {
             csv.row({p.ppv, double(p.res[0]), double(p.res[1]), double(p.res[2]), p.refs_per_particle, p.cpu_seconds, p.query_ns,
                      p.build_seconds, double(p.memory) / 1048576.0, p.mean});
             v_q.push_back(p.query_ns);
+            v_steps.push_back(p.steps_per_ray);
+            v_tests.push_back(p.tests_per_ray);
             v_ppv.push_back(p.ppv);
             v_rx.push_back(p.res[0]);
             v_ry.push_back(p.res[1]);
@@ -211,6 +252,16 @@ int main(int argc, char** argv) {
         std::printf("  fastest: %d x %d x %d = %.2f particles per voxel (paper: 60^3 for 2e5 particles = %.2f per voxel;\n"
                     "  'roughly one particle per voxel')\n",
                     b.res[0], b.res[1], b.res[2], b.ppv, 2e5 / (60.0 * 60 * 60));
+        // The two sides of the trade-off, counted rather than timed (the same on any machine): a
+        // finer grid walks more cells, a coarser one tests more particle references per ray; the
+        // particles found in the query cylinders are the same at every resolution.
+        bool members_equal = true;
+        for (const auto& p : pts) members_equal = members_equal && p.members == pts[0].members;
+        const Point& coarsest = pts.back();
+        std::printf("  work per ray (slab chords, no timing): DDA steps %.1f (finest) .. %.1f (coarsest); particle tests"
+                    " %.1f .. %.1f; cylinder members %.3f at every resolution: %s\n",
+                    pts[0].steps_per_ray, coarsest.steps_per_ray, pts[0].tests_per_ray, coarsest.tests_per_ray,
+                    pts[0].members / double(std::min<std::uint64_t>(rays, 20000)), members_equal ? "yes" : "NO");
         if (!ex.root()) return ex.finish({});  // only rank 0 writes
         const auto csv_path = ex.csv("guo21_fig17_grid_resolution.csv", csv);
         ex.plot("guo21_fig17_grid_resolution", csv_path, ex.out() / "guo21_fig17_grid_resolution.png");
@@ -228,6 +279,11 @@ int main(int argc, char** argv) {
                              .nums("query_ns_per_ray", v_q)
                              .num("fastest_particles_per_voxel", b.ppv)
                              .num("fastest_particles_per_voxel_queries", pts[best_q].ppv)
+                             .nums("dda_steps_per_ray", v_steps)
+                             .nums("particle_tests_per_ray", v_tests)
+                             .integer("members_equal_across_grids", members_equal ? 1 : 0)
+                             .num("dda_steps_finest_over_coarsest", pts[0].steps_per_ray / coarsest.steps_per_ray)
+                             .num("particle_tests_coarsest_over_finest", coarsest.tests_per_ray / pts[0].tests_per_ray)
                              .num("time_at_one_over_fastest", one_over_fastest)
                              .num("finest_over_fastest", finest_over_fastest)
                              .str("fastest_resolution",
