@@ -120,15 +120,20 @@ struct BowlVolume {
         if (t0 > t1 || t1 < 1e-9) return inf;
         return std::max(t0, 0.0);
     }
+    /// Outward normal of the boundary part nearest to p (inside: the face a shell step from p leaves
+    /// through, for ShellFaceOptics): the flat top, or the sphere's radial direction. For the
+    /// sphere the tracer treats the face as its tangent plane at the nearest point, at distance
+    /// (*this)(p) along this normal.
+    [[nodiscard]] Vec3d normal(const Vec3d& p) const noexcept {
+        // |.|: on the boundary (the explicit tracer's faces) a point may be a round-off outside.
+        if (std::abs(c.z - p.z) <= std::abs(rb - glm::length(p - c))) return Vec3d(0, 0, 1);
+        return glm::normalize(p - c);
+    }
 };
 /// Entry distance of a ray into the bowl (inf if it misses).
 inline double volume_entry(const BowlVolume& v, const gl::Ray<double>& r) noexcept { return v.entry(r); }
 /// Outward normal of the bowl's boundary part nearest to p (on the boundary).
-inline Vec3d volume_normal(const BowlVolume& v, const Vec3d& p) noexcept {
-    // On the boundary: the flat top where p.z is at the rim height, else the sphere.
-    if (std::abs(v.c.z - p.z) <= std::abs(v.rb - glm::length(p - v.c))) return Vec3d(0, 0, 1);
-    return glm::normalize(p - v.c);
-}
+inline Vec3d volume_normal(const BowlVolume& v, const Vec3d& p) noexcept { return v.normal(p); }
 
 /// The Fig. 9 scene (and Fig. 11, Fig. 12): explicit spheres in a volume (a cube or a bowl), light,
 /// blocker, a black floor or a diffuse table at z = 0.
@@ -581,8 +586,8 @@ struct ShellSceneOptions {
     }
 };
 
-/// Face optics at the shell exit (Figs. 9, 11; ShellFaceOptics, integrators/shell_tracer.hpp):
-/// `--face-optics on|off` (default on). With it, a shell step that leaves the cube crosses the
+/// Face optics at the shell exit (Figs. 9, 11, 12; ShellFaceOptics, integrators/shell_tracer.hpp):
+/// `--face-optics on|off` (default on). With it, a shell step that leaves the volume crosses the
 /// face inside glass with the probability q(|cos theta|) measured on the packing's own paths
 /// (plane_crossing_glass_fraction, 8 cells), and is Fresnel-reflected back or refracted out there.
 struct FaceOpticsOption {
@@ -591,7 +596,7 @@ struct FaceOpticsOption {
         FaceOpticsOption f;
         const std::string v = ex.opt<std::string>(
             "face-optics", "on",
-            "on: shell exits through a cube face meet its glass-air interface with the measured glass fraction q(|cos|) (Fresnel reflection back, refraction out); off: they leave straight (Moon07)");
+            "on: shell exits through a face of the volume meet its glass-air interface with the measured glass fraction q(|cos|) (Fresnel reflection back, refraction out); off: they leave straight (Moon07)");
         if (v != "on" && v != "off") throw gl_examples::cli_error("--face-optics = " + v + " must be on or off");
         f.on = v == "on";
         return f;

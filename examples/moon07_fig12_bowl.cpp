@@ -8,7 +8,7 @@
 //        [--spheres N] [--fraction F] [--width W] [--spp-pt N] [--spp-low N] [--spp-high N]
 //        [--batches B] [--min-scatter K] [--switch-depth D] [--light-size S] [--table-albedo A]
 //        [--shell-paths N] [--shell-radii N] [--rebuild-table] [--no-continuation] [--no-table-nee]
-//        [--checkpoint SECONDS] [--resume]
+//        [--face-optics on|off] [--checkpoint SECONDS] [--resume]
 //
 // Scene (units: the sphere radius R = 1): the bowl is the lower half of a ball of radius
 // R_b = (2 N / f)^(1/3) (so that it holds N spheres at packing fraction f), filled to its rim
@@ -41,6 +41,7 @@ int main(int argc, char** argv) {
         const int H = std::max(1, W * 3 / 4);
         const int spp_pt = ex.opt<int>("spp-pt", 48, "path-tracing samples per pixel per batch");
         const ShellSceneOptions so = ShellSceneOptions::declare(ex, "bowl");
+        const FaceOpticsOption fo = FaceOpticsOption::declare(ex);
         const double light_size = ex.opt<double>(
             "light-size", 0.3, "side of the square light / bowl diameter D (a larger light than Fig. 9's)");
         const int B = ex.opt<int>("batches", 8, "independent batches per image (>= 4)");
@@ -98,7 +99,11 @@ int main(int argc, char** argv) {
         const gl::ShellTable& table = ct.table;
         const double raw_bytes = ct.raw_bytes, factored_bytes = ct.factored_bytes;
 
-        const gl::ShellTracerOptions to = so.tracer_options(R);
+        gl::ShellTracerOptions to = so.tracer_options(R);
+        // Face optics: the bowl's faces are glass where its boundary cuts spheres (the rim plane and
+        // the sphere, the latter as its tangent plane at the point nearest to a step's start).
+        double face_q = 0;
+        to.face = fo.optics(rsa, scene.eta, scene.cut && !scene.clear_faces, full, seed, face_q);
         scene.hand_back = so.hand_back;
         const gl::ShellTracer<S1, BowlVolume> tracer(table, scene.cube, to);
 
@@ -161,6 +166,8 @@ int main(int argc, char** argv) {
             .num("paper_factored_bytes", 250e3)
             .num("table_albedo", table_albedo)
             .boolean("cut_spheres", scene.cut)
+            .boolean("face_optics", to.face.enabled())
+            .num("face_glass_fraction", face_q)
             .boolean("exit_rule_table", to.exit_rule == gl::ShellExitRule::table)
             .boolean("hand_back", scene.hand_back)
             .str("cos_cells", so.cos_cells)
