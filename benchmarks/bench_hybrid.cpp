@@ -122,7 +122,7 @@ BENCHMARK_CAPTURE(BM_DiffusionConnection, multipole, true);
 void BM_BundleSpread(benchmark::State& state) {
     std::array<Vec3d, 16> x;
     Rng rng = Rng::from_key(1, 2, 3);
-    for (auto& p : x) p = Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>());
+    for (auto& p : x) p = rng.uniform3<double>();
     for (auto _ : state) benchmark::DoNotOptimize(bundle_spread(x.data(), 16));
     state.SetItemsProcessed(std::int64_t(state.iterations()) * 16);
 }

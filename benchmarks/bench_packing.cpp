@@ -64,7 +64,7 @@ static void BM_FirstHit(benchmark::State& state) {
     Rng rng = Rng::from_key(11);
     std::vector<std::pair<Vec3d, Vec3d>> rays(4096);
     for (auto& r : rays)
-        r = {Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()) * tile.side(),
+        r = {rng.uniform3<double>() * tile.side(),
              sample_uniform_sphere<double>(rng.uniform2<double>())};
     std::size_t i = 0;
     for (auto _ : state) {
@@ -82,7 +82,7 @@ static void BM_BoxQuery(benchmark::State& state) {
     Rng rng = Rng::from_key(12);
     std::size_t found = 0;
     for (auto _ : state) {
-        const Vec3d lo = Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()) * tile.side();
+        const Vec3d lo = rng.uniform3<double>() * tile.side();
         tile.for_each_overlapping(lo, lo + Vec3d(2 * tile.radius()), [&](const TileSphereRef&) { ++found; });
     }
     benchmark::DoNotOptimize(found);

@@ -62,7 +62,7 @@ static void BM_OctreeBuild(benchmark::State& state) {
     gl::Rng rng = gl::Rng::from_key(3);
     for (std::size_t i = 0; i < n; ++i) {
         const float s = (i % 2) ? 0.1f : 1.0f;
-        items[i].p = gl::Vec3f(rng.uniform<float>(), rng.uniform<float>(), rng.uniform<float>()) * s;
+        items[i].p = rng.uniform3<float>() * s;
         items[i].w = gl::RGB(1.0f);
         items[i].extent = gl::Aabb<float>(items[i].p, items[i].p);
     }

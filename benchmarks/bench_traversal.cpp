@@ -55,7 +55,7 @@ static void BM_TiledPackingIntersect(benchmark::State& state) {
     Rng rng = Rng::from_key(2);
     std::vector<std::pair<Vec3d, Vec3d>> rays(4096);
     for (auto& r : rays)
-        r = {Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()),
+        r = {rng.uniform3<double>(),
              sample_uniform_sphere<double>(rng.uniform2<double>())};
     std::size_t i = 0;
     TiledTraversalStats st;

@@ -95,6 +95,16 @@ int main(int argc, char** argv) {
         opt.seed = ex.seed();
         opt.vpt.max_depth = 256;
 
+        // A ray of the query benchmark and the work count: from a uniform point of the slab in a
+        // uniform direction; t1 = its distance to the slab's exit (false if it misses the slab).
+        auto slab_ray = [&](gl::Rng& rng, gl::Vec3f& o, gl::Vec3f& d, float& t1) {
+            const double ux = rng.uniform<double>(), uy = rng.uniform<double>(), uz = rng.uniform<double>();  // in this order
+            o = gl::Vec3f(float(lo.x + (hi.x - lo.x) * ux), float(lo.y + (hi.y - lo.y) * uy), float(lo.z + (hi.z - lo.z) * uz));
+            d = gl::sample_uniform_sphere(rng.uniform2<float>());
+            float t0 = 0;
+            t1 = 1e30f;
+            return gl::clip_to_box(o, d, gl::Vec3f(lo), gl::Vec3f(hi), t0, t1);
+        };
         const std::vector<double> ppv_target = {1.0 / 16, 1.0 / 8, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0};
         struct Point {
             std::array<int, 3> res{};
@@ -139,12 +149,9 @@ int main(int argc, char** argv) {
                     const double q0 = thread_cpu_seconds();
                     for (std::uint64_t r = 0; r < rays; ++r) {
                         gl::Rng rng = gl::Rng::from_key(ex.seed(), 7, r);
-                        const gl::Vec3f o(float(lo.x + (hi.x - lo.x) * rng.uniform<double>()),
-                                          float(lo.y + (hi.y - lo.y) * rng.uniform<double>()),
-                                          float(lo.z + (hi.z - lo.z) * rng.uniform<double>()));
-                        const gl::Vec3f d = gl::sample_uniform_sphere(rng.uniform2<float>());
-                        float t0 = 0, t1 = 1e30f;
-                        if (!gl::clip_to_box(o, d, gl::Vec3f(lo), gl::Vec3f(hi), t0, t1)) continue;
+                        gl::Vec3f o, d;
+                        float t1 = 0;
+                        if (!slab_ray(rng, o, d, t1)) continue;
                         const gl::Ray<float> ray(o, d, t1);
                         const auto it = med_ref.sample_interaction(ray, t1, rng);
                         sink += double(it.t) + double(med_ref.transmittance(ray, t1, rng)[0]);
@@ -168,12 +175,9 @@ int main(int argc, char** argv) {
                     const std::uint64_t work_rays = std::min<std::uint64_t>(rays, 20000);
                     for (std::uint64_t r = 0; r < work_rays; ++r) {
                         gl::Rng rng = gl::Rng::from_key(ex.seed(), 11, r);
-                        const gl::Vec3f o(float(lo.x + (hi.x - lo.x) * rng.uniform<double>()),
-                                          float(lo.y + (hi.y - lo.y) * rng.uniform<double>()),
-                                          float(lo.z + (hi.z - lo.z) * rng.uniform<double>()));
-                        const gl::Vec3f d = gl::sample_uniform_sphere(rng.uniform2<float>());
-                        float t0 = 0, t1 = 1e30f;
-                        if (!gl::clip_to_box(o, d, gl::Vec3f(lo), gl::Vec3f(hi), t0, t1)) continue;
+                        gl::Vec3f o, d;
+                        float t1 = 0;
+                        if (!slab_ray(rng, o, d, t1)) continue;
                         std::int64_t a[3], e[3];
                         cell_xyz(o, a);
                         cell_xyz(o + t1 * d, e);

@@ -119,7 +119,7 @@ void ept_block(const Agg& agg, std::uint64_t first, std::uint64_t count, std::ui
         gl::Rng rng = gl::Rng::from_key(seed, i, 0xf19e);
         gl::Vec3d p(0.0);
         for (int k = 0; k < 1000; ++k) {
-            p = agg.tile().side() * gl::Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>());
+            p = agg.tile().side() * rng.uniform3<double>();
             if (!agg.tile().sphere_containing(p)) break;
         }
         const gl::Vec3d d = gl::sample_uniform_sphere(rng.uniform2<double>());

@@ -291,13 +291,13 @@ struct VolumeScene {
                         // Shadow ray to the light: the direct segment (not through the volume, whose
                         // light is found by the path); the bounce direction's direct hit is then skipped.
                         const gl::LightSample<double, S1> ls =
-                            sample_light(p, Vec3d(rng.uniform<double>(), rng.uniform<double>(), 0.0));
+                            sample_light(p, Vec3d(rng.uniform2<double>(), 0.0));
                         if (counting && ls && ls.w.z > 0 && visible(p, ls.w, ls.dist) &&
                             !(cube_entry(gl::Ray<double>(p, ls.w)) < ls.dist))
                             acc += beta * floor_albedo * ls.w.z / gl::pi_v<double> * ls.L[0] / ls.pdf;
                         skip = true;
                     }
-                    d = gl::sample_cosine_hemisphere(gl::Vec2d(rng.uniform<double>(), rng.uniform<double>()));
+                    d = gl::sample_cosine_hemisphere(rng.uniform2<double>());
                     beta *= floor_albedo;
                     continue;
                 }

@@ -170,11 +170,11 @@ struct GrainBowlScene {
                 ++floor_bounces;
                 p += t_floor * d;
                 p.z = 1e-9 * R;
-                const gl::LightSample<double, S1> ls = sample_light(p, Vec3d(rng.uniform<double>(), rng.uniform<double>(), 0.0));
+                const gl::LightSample<double, S1> ls = sample_light(p, Vec3d(rng.uniform2<double>(), 0.0));
                 if (counting && ls && ls.w.z > 0 && !agg->occluded(p, ls.w, 0.0, ls.dist))
                     acc += beta * floor_albedo * ls.w.z / gl::pi_v<double> * ls.L[0] / ls.pdf;
                 skip = true;
-                d = gl::sample_cosine_hemisphere(gl::Vec2d(rng.uniform<double>(), rng.uniform<double>()));
+                d = gl::sample_cosine_hemisphere(rng.uniform2<double>());
                 beta *= floor_albedo;
                 continue;
             }

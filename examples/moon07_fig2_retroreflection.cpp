@@ -72,7 +72,7 @@ std::vector<gl::Vec2d> rsa_disk(double a, double Rv, double f, gl::Rng& rng) {
     std::vector<gl::Vec2d> c;
     const std::uint64_t max_trials = 2000 * std::uint64_t(target) + 100000;
     for (std::uint64_t trial = 0; trial < max_trials && c.size() < target; ++trial) {
-        const gl::Vec2d q = Rv * gl::sample_uniform_disk_concentric(gl::Vec2d(rng.uniform<double>(), rng.uniform<double>()));
+        const gl::Vec2d q = Rv * gl::sample_uniform_disk_concentric(rng.uniform2<double>());
         const int ix = int((q.x - lo) / cell), iy = int((q.y - lo) / cell);
         bool ok = true;
         for (int dy = -1; dy <= 1 && ok; ++dy)
@@ -126,7 +126,7 @@ Vec3d beam_origin(const Fig2Case& k, gl::Rng& rng) {
     if (k.dim == 2) {
         y = k.Re * (2 * rng.uniform<double>() - 1);
     } else {
-        const gl::Vec2d q = k.Re * gl::sample_uniform_disk_concentric(gl::Vec2d(rng.uniform<double>(), rng.uniform<double>()));
+        const gl::Vec2d q = k.Re * gl::sample_uniform_disk_concentric(rng.uniform2<double>());
         y = q.x;
         z = q.y;
     }
@@ -217,7 +217,7 @@ std::vector<double> single_scatterer_table(int dim, std::size_t n, std::uint64_t
         if (dim == 2) {
             y = 2 * rng.uniform<double>() - 1;
         } else {
-            const gl::Vec2d q = gl::sample_uniform_disk_concentric(gl::Vec2d(rng.uniform<double>(), rng.uniform<double>()));
+            const gl::Vec2d q = gl::sample_uniform_disk_concentric(rng.uniform2<double>());
             y = q.x;
             z = q.y;
         }

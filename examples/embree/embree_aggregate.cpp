@@ -100,7 +100,7 @@ gl::RGB embree_radiance(const EmbreeWorld& w, const LibScene& lights, const Agg&
     gl::init_grain_context(ctx, &rec);
 
     auto nee = [&](const gl::Vec3d& x, const gl::Vec3d& nf, const gl::RGB& rho, const gl::RGB& thr) {
-        const gl::Vec3f u(rng.uniform<float>(), rng.uniform<float>(), rng.uniform<float>());
+        const gl::Vec3f u = rng.uniform3<float>();
         const gl::Vec3d origin = x + gl::detail::grain_surface_epsilon(R) * nf;
         const auto ls = lights.sample_light(gl::Vec3f(origin), u);
         if (!ls || ls.L.is_black()) return;

@@ -129,7 +129,7 @@ TEST_CASE("deterministic instancing: the same grain for a sphere from any ray", 
     std::array<int, 3> exemplar_counts{};
     for (int i = 0; i < 1000; ++i) {
         const Vec3d o = 20.0 * sample_uniform_sphere(rng.uniform2<double>());
-        const Vec3d d = glm::normalize(Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()) - 0.5 - o / 20.0);
+        const Vec3d d = glm::normalize(rng.uniform3<double>() - 0.5 - o / 20.0);
         const AggregateHit a = agg.intersect(o, d, 0.0, 100.0);
         if (!a) continue;
         const Vec3d p = o + a.t * d;

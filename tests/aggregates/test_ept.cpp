@@ -243,7 +243,7 @@ TEST_CASE("EPT grain interactions reproduce the scatterometer's g and alpha_s", 
             Rng rng = Rng::from_key(12, std::uint64_t(i), 0);
             Vec3d p(0.0);
             for (int k = 0; k < 100; ++k) {
-                p = tile.side() * Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>());
+                p = tile.side() * rng.uniform3<double>();
                 if (!tile.sphere_containing(p)) break;
             }
             RGB w(1.0f);

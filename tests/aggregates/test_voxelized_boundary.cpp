@@ -35,7 +35,7 @@ void check_classes_against(const VoxelizedBoundary<Shape>& vb, Truth&& truth_ins
                     if (s < 8)
                         q = corner + L * Vec3d(s & 1, (s >> 1) & 1, (s >> 2) & 1);
                     else
-                        q = corner + L * Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>());
+                        q = corner + L * rng.uniform3<double>();
                     const bool in = truth_inside(q);
                     if (c == VoxelClass::inside && s >= 8) REQUIRE(in);
                     if (c == VoxelClass::outside && s >= 8) REQUIRE_FALSE(in);

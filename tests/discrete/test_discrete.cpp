@@ -198,7 +198,7 @@ TEST_CASE("grid: cylinder and sphere queries equal brute force over every partic
             gl::Rng rng = gl::Rng::from_key(5, res, std::uint64_t(dil * 1000));
             int mismatches = 0, members_total = 0;
             for (int q = 0; q < 300; ++q) {
-                const Vec3f o = Vec3f(-0.2f) + 1.4f * Vec3f(rng.uniform<float>(), rng.uniform<float>(), rng.uniform<float>());
+                const Vec3f o = Vec3f(-0.2f) + 1.4f * rng.uniform3<float>();
                 const Vec3f d = random_unit(rng);
                 const float t_max = 0.2f + 1.5f * rng.uniform<float>();
                 const float rc = float(dil) * rng.uniform<float>();
@@ -255,8 +255,7 @@ TEST_CASE("T_A of a Poisson cloud matches the closed form of the membership rule
         for (int q = 0; q < 300; ++q) {
             // A segment of length L well inside the box.
             const Vec3f d = random_unit(rng);
-            const Vec3f mid = Vec3f(float(side / 2)) + 150.0f * (Vec3f(rng.uniform<float>(), rng.uniform<float>(),
-                                                                      rng.uniform<float>()) - Vec3f(0.5f));
+            const Vec3f mid = Vec3f(float(side / 2)) + 150.0f * (rng.uniform3<float>() - Vec3f(0.5f));
             const Vec3f o = mid - float(L / 2) * d;
             const float T = s.medium->transmittance(gl::Ray<float>(o, d), float(L), dummy)[0];
             sum += T;
@@ -291,8 +290,7 @@ TEST_CASE("mean free flight vs 1 / sigma_t for r_c >> r_p", "[discrete][freeflig
     const int n = 5000;
     for (int k = 0; k < n; ++k) {
         const Vec3f d = random_unit(rng);
-        const Vec3f o = Vec3f(float(side / 2)) + 500.0f * (Vec3f(rng.uniform<float>(), rng.uniform<float>(),
-                                                                  rng.uniform<float>()) - Vec3f(0.5f)) - 0.5f * L * d;
+        const Vec3f o = Vec3f(float(side / 2)) + 500.0f * (rng.uniform3<float>() - Vec3f(0.5f)) - 0.5f * L * d;
         const auto it = s.medium->sample_interaction(gl::Ray<float>(o, d), L, rng);
         const double t = it.kind == gl::EventKind::scatter ? it.t : L;
         CHECK(it.weight[0] == Approx(1.0f));  // analog and non-absorbing
@@ -324,8 +322,7 @@ TEST_CASE("Q(theta) of Eq. 24 tends to sigma_s f(theta) of Eq. 17 as the query s
             double sum = 0, sum2 = 0;
             const int n = 300;
             for (int k = 0; k < n; ++k) {
-                const Vec3f y = Vec3f(float(side / 2)) + 1000.0f * (Vec3f(rng.uniform<float>(), rng.uniform<float>(),
-                                                                           rng.uniform<float>()) - Vec3f(0.5f));
+                const Vec3f y = Vec3f(float(side / 2)) + 1000.0f * (rng.uniform3<float>() - Vec3f(0.5f));
                 const double q = s.medium->query_sphere_q(y, w_in, w_out, rq) / want;
                 sum += q;
                 sum2 += q * q;

@@ -75,7 +75,7 @@ TEST_CASE("BVH hits are the scalar watertight test's, bit for bit", "[geometry][
             Counts c;
             for (int k = 0; k < 3000; ++k) {
                 const Vec3f o = (k % 4 == 0 ? 0.2f : 1.5f) * sample_uniform_sphere(rng.uniform2<float>());
-                const Vec3f target = 0.6f * (Vec3f(rng.uniform<float>(), rng.uniform<float>(), rng.uniform<float>()) -
+                const Vec3f target = 0.6f * (rng.uniform3<float>() -
                                              Vec3f(0.5f));
                 const Vec3f d = (k % 2 ? 3.0f : 1.0f) * glm::normalize(target - o);  // non-unit too
                 check_ray(mesh, bvh, o, d, k % 3 == 0 ? 0.9f : 100.0f, c);

@@ -44,7 +44,7 @@ TEST_CASE("closest point on a triangle matches a dense barycentric search", "[ge
     Rng rng = Rng::from_key(101);
     const Vec3d a(0, 0, 0), b(1.3, 0.1, 0), c(0.2, 0.9, 0.3);
     for (int k = 0; k < 200; ++k) {
-        const Vec3d p = Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()) * 4.0 - Vec3d(1.5);
+        const Vec3d p = rng.uniform3<double>() * 4.0 - Vec3d(1.5);
         const Vec3d q = closest_point_on_triangle(p, a, b, c);
         double dense = std::numeric_limits<double>::infinity();
         const int n = 200;
@@ -104,7 +104,7 @@ TEST_CASE("the largest ball that fits never crosses a mesh surface (random point
         const Aabb<double> b = md.bounds();
         int tested = 0, tight = 0;
         for (int k = 0; k < 4000 && tested < 150; ++k) {
-            const Vec3d p = b.lo + Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()) * b.extent();
+            const Vec3d p = b.lo + rng.uniform3<double>() * b.extent();
             if (!md.inside(p)) continue;
             const double d = md(p);
             REQUIRE(d > 0);

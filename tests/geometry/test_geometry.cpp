@@ -140,7 +140,7 @@ TEST_CASE("uniform random rotation is orthonormal and unbiased", "[geometry][tra
     Vec3d mean(0.0);
     const int n = 20000;
     for (int i = 0; i < n; ++i) {
-        const auto r = uniform_random_rotation(Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()));
+        const auto r = uniform_random_rotation(rng.uniform3<double>());
         CHECK(std::abs(glm::dot(r.r0, r.r1)) < 1e-12);
         CHECK(std::abs(glm::dot(r.r0, r.r0) - 1) < 1e-12);
         CHECK(glm::dot(glm::cross(r.r0, r.r1), r.r2) == Approx(1.0));  // proper rotation

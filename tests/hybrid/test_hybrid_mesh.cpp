@@ -109,7 +109,7 @@ TEST_CASE("MeshDistance::ball_inside: never true closer to the mesh than r (brut
     const Aabb<double> b = md.bounds();
     int yes = 0, no_inside = 0, tested = 0;
     for (int k = 0; k < 1500; ++k) {
-        const Vec3d p = b.lo + Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()) * b.extent();
+        const Vec3d p = b.lo + rng.uniform3<double>() * b.extent();
         const double r = 4.0 * rng.uniform<double>();  // d_DA-like radii up to 40 % of the blob
         const bool in = brute_inside(mesh, p);
         const double d = brute_distance(mesh, p);

@@ -62,7 +62,7 @@ TEST_CASE("closed_mesh: pseudo-normal inside test agrees with ray parity; tangen
     int disagree = 0, inside = 0;
     const int n = 4000;
     for (int i = 0; i < n; ++i) {
-        const Vec3f p = 1.3f * (2.0f * Vec3f(rng.uniform<float>(), rng.uniform<float>(), rng.uniform<float>()) - 1.0f);
+        const Vec3f p = 1.3f * (2.0f * rng.uniform3<float>() - 1.0f);
         const bool a = shape.inside(p), b = parity.inside(Vec3d(p));
         disagree += a != b;
         inside += a;
@@ -73,7 +73,7 @@ TEST_CASE("closed_mesh: pseudo-normal inside test agrees with ray parity; tangen
     // Icosphere (level 5): q on the unit sphere, n along p, for inside and outside points.
     const ClosedMeshShape<float> ico(make_icosphere<float>(5));
     for (int i = 0; i < 200; ++i) {
-        const Vec3f d = glm::normalize(2.0f * Vec3f(rng.uniform<float>(), rng.uniform<float>(), rng.uniform<float>()) - 1.0f);
+        const Vec3f d = glm::normalize(2.0f * rng.uniform3<float>() - 1.0f);
         const float r = 0.2f + 1.4f * rng.uniform<float>();
         Vec3f q(0.0f), nn(0.0f);
         const bool in = ico.tangent_plane(r * d, q, nn);
@@ -83,7 +83,7 @@ TEST_CASE("closed_mesh: pseudo-normal inside test agrees with ray parity; tangen
     }
     // Ray queries: the outward normal from both sides; t equals the sphere's within the facets' sag.
     for (int i = 0; i < 100; ++i) {
-        const Vec3f d = glm::normalize(2.0f * Vec3f(rng.uniform<float>(), rng.uniform<float>(), rng.uniform<float>()) - 1.0f);
+        const Vec3f d = glm::normalize(2.0f * rng.uniform3<float>() - 1.0f);
         float t = 0;
         Vec3f nn(0.0f);
         REQUIRE(ico.intersect(Ray<float>(Vec3f(0.0f), d), t, nn));

@@ -23,7 +23,7 @@ std::vector<Tree::Item> random_items(int n, std::uint64_t seed) {
         auto& it = v[std::size_t(i)];
         // Clustered: half in a small ball (a "caustic"), half spread out.
         const double s = (i % 2) ? 0.05 : 1.0;
-        it.p = Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()) * s;
+        it.p = rng.uniform3<double>() * s;
         it.d = glm::normalize(Vec3d(0.2 * rng.uniform<double>(), 0.1, 1.0));
         it.w = Grey(0.5 + rng.uniform<double>());
         it.extent = Aabb<double>(it.p - 0.01, it.p + 0.01);

@@ -213,7 +213,7 @@ struct CubeCase {
             const LightSample<double, S1> ls = env.sample_light(x, Vec3d(rng.uniform<double>(), rng.uniform<double>(), 0));
             if (ls)
                 acc += beta * m.phase().eval(w, ls.w).pdf * std::exp(-cube.exit_distance(x, ls.w)) * ls.L[0] / ls.pdf;
-            w = m.phase().sample(w, Vec2d(rng.uniform<double>(), rng.uniform<double>())).w;
+            w = m.phase().sample(w, rng.uniform2<double>()).w;
             count_first = false;
             if (tracer && tracer->may_switch(x, 1)) {
                 const ShellHandBack<S1> hb = tracer->trace_to_boundary(x, w, rng);
@@ -380,10 +380,10 @@ struct FloorCase {
                     p += tf * d;
                     p.z = 0;
                     beta *= floor_albedo;
-                    const LightSample<double, S1> ls = light.sample(p, Vec2d(rng.uniform<double>(), rng.uniform<double>()));
+                    const LightSample<double, S1> ls = light.sample(p, rng.uniform2<double>());
                     if (ls && ls.w.z > 0)
                         acc += beta * ls.w.z / pi_v<double> * ls.L[0] / ls.pdf * transmittance(p, ls.w, ls.dist);
-                    d = sample_cosine_hemisphere(Vec2d(rng.uniform<double>(), rng.uniform<double>()));
+                    d = sample_cosine_hemisphere(rng.uniform2<double>());
                     skip = true;
                     continue;
                 }
@@ -404,12 +404,12 @@ struct FloorCase {
             }
             p += t * d;
             if (tracer && tracer->may_switch(p, 1)) {
-                d = m.phase().sample(d, Vec2d(rng.uniform<double>(), rng.uniform<double>())).w;
+                d = m.phase().sample(d, rng.uniform2<double>()).w;
                 return acc + beta * tracer->trace(p, d, rng, HookEnv<Tracer>{this, tracer, bounces, stats}, stats)[0];
             }
-            const LightSample<double, S1> ls = light.sample(p, Vec2d(rng.uniform<double>(), rng.uniform<double>()));
+            const LightSample<double, S1> ls = light.sample(p, rng.uniform2<double>());
             if (ls) acc += beta * m.phase().eval(d, ls.w).pdf * std::exp(-cube.exit_distance(p, ls.w)) * ls.L[0] / ls.pdf;
-            d = m.phase().sample(d, Vec2d(rng.uniform<double>(), rng.uniform<double>())).w;
+            d = m.phase().sample(d, rng.uniform2<double>()).w;
             skip = true;
         }
         return acc;
@@ -547,7 +547,7 @@ TEST_CASE("Shell tracer face optics: a glass-walled continuous cube matches exac
                 continue;
             }
             x += t * w;
-            w = hg.sample(w, Vec2d(rng.uniform<double>(), rng.uniform<double>())).w;
+            w = hg.sample(w, rng.uniform2<double>()).w;
         }
         return 0.0;
     };

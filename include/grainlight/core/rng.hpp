@@ -108,6 +108,17 @@ public:
         const F b = uniform<F>();
         return Vec2<F>(a, b);
     }
+    /// Three consecutive uniform [0, 1) values of type F (x, then y, then z), e.g. a uniform point
+    /// of a box. Use this (or uniform2) instead of `Vec3(rng.uniform<F>(), ...)`: the order in which
+    /// a function's arguments are evaluated is unspecified, so such an expression draws the numbers
+    /// in a compiler-dependent order (right to left under g++, left to right under clang).
+    template <std::floating_point F>
+    GRAINLIGHT_HOST_DEVICE Vec3<F> uniform3() noexcept {
+        const F a = uniform<F>();
+        const F b = uniform<F>();
+        const F c = uniform<F>();
+        return Vec3<F>(a, b, c);
+    }
     /// Skip ahead by delta steps (Brown 1994, arbitrary-stride LCG jump).
     constexpr void advance(std::int64_t delta_) noexcept {
         std::uint64_t cur_mult = multiplier, cur_plus = inc_, acc_mult = 1u, acc_plus = 0u;

@@ -265,7 +265,7 @@ template <BoundaryShape Shape>
         Rng rng = Rng::from_key(seed, i, 0x66667265ull);
         Vec3d p(0.0);
         for (int k = 0; k < 1000; ++k) {
-            p = agg.tile().side() * Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>());
+            p = agg.tile().side() * rng.uniform3<double>();
             if (!agg.tile().sphere_containing(p)) break;
         }
         const Vec3d d = sample_uniform_sphere(rng.uniform2<double>());

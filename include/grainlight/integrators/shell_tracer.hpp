@@ -402,7 +402,7 @@ public:
             const double t_b = volume_.exit_distance(x, omega);
             if (opt_.nee && opt_.exit_rule == ShellExitRule::radial) {
                 // first shadow ray: leave through a sampled exit point outside, along y - x
-                const LightSample<double, S> ls = env.sample_light(x, Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()));
+                const LightSample<double, S> ls = env.sample_light(x, rng.uniform3<double>());
                 if (ls) {
                     const double dens = face_density(x, ls.w, [&](const Vec3d& w) {
                         return shells_.exit_escape_density(x, omega, t_b, w);
@@ -419,7 +419,7 @@ public:
                     Vec3d y, w_s;
                     double pdf_s = 0;
                     shells_.sample_exit(i, x, omega, rng, y, w_s, pdf_s);
-                    const LightSample<double, S> ls = env.sample_light(y, Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()));
+                    const LightSample<double, S> ls = env.sample_light(y, rng.uniform3<double>());
                     if (ls && volume_(y) < 0.0) {
                         const Vec3d n = glm::normalize(y - x);
                         const double pu = t_b < r ? shells_.attenuation(t_b) : shells_.table().p_unscattered[std::size_t(i)];
@@ -488,7 +488,7 @@ public:
                     if (stats) ++stats->scattered;
                     beta *= st.weight;
                     if (opt_.nee) {  // second shadow ray: continue along w_l and leave unscattered
-                        const LightSample<double, S> ls = env.sample_light(st.p, Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()));
+                        const LightSample<double, S> ls = env.sample_light(st.p, rng.uniform3<double>());
                         if (ls) {
                             const double dens = face_density(st.p, ls.w, [&](const Vec3d& w) {
                                 return shells_.straight_escape_density(st.shell, x, omega, st.p, w,

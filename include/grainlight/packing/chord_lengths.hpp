@@ -80,7 +80,7 @@ ChordMeasurement measure_outer_chords(const PeriodicTile& tile, std::uint64_t li
     ChordMeasurement m;
     const double side = tile.side();
     for (std::uint64_t l = 0; l < lines; ++l) {
-        const Vec3d o(rng.uniform<double>() * side, rng.uniform<double>() * side, rng.uniform<double>() * side);
+        const Vec3d o = rng.uniform3<double>() * side;
         const Vec3d d = sample_uniform_sphere<double>(rng.uniform2<double>());
         double t = 0;
         bool after_exit = false;  // is t the exit point of a sphere (start of a complete chord)?

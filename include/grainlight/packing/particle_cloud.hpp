@@ -129,7 +129,7 @@ public:
                 Vec3d p;
                 for (int k = 0;; ++k) {
                     ++tries;
-                    p = lo + Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()) * ext;
+                    p = lo + rng.uniform3<double>() * ext;
                     if (shape.inside(p)) break;
                     check_argument(k < 100000, who, "shape", "no point inside after 1e5 tries", "a shape with volume");
                 }
@@ -183,7 +183,7 @@ public:
                                    "fewer particles: no free place for particle " + std::to_string(i) + " after " +
                                        std::to_string(max_tries) + " draws (random sequential addition is jammed)");
                     // Rounded to the stored float centre first, so the test holds for what is stored.
-                    p = Vec3d(Vec3<float>(lo + Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()) * ext));
+                    p = Vec3d(Vec3<float>(lo + rng.uniform3<double>() * ext));
                     if (!shape.inside(p)) continue;
                     const std::int64_t cx = cell(p, 0), cy = cell(p, 1), cz = cell(p, 2);
                     bool free = true;

@@ -47,7 +47,7 @@ inline bool rsa_centers(std::size_t n, double radius, double side, Rng& rng, std
     std::uint64_t attempts = 0;
     while (out.size() < n) {
         if (attempts++ >= max_attempts) return false;
-        const Vec3d c(rng.uniform<double>() * side, rng.uniform<double>() * side, rng.uniform<double>() * side);
+        const Vec3d c = rng.uniform3<double>() * side;
         std::array<std::int64_t, 3> k{};
         for (int a = 0; a < 3; ++a) k[a] = std::clamp<std::int64_t>(static_cast<std::int64_t>(c[a] / w), 0, m - 1);
         bool ok = true;

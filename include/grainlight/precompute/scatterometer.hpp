@@ -262,7 +262,7 @@ struct ScatterometerTally {
                 Vec3d wi = w;
                 if (cfg.random_rotation) {
                     const Rotation<double> rot = uniform_random_rotation(
-                        Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()));
+                        rng.uniform3<double>());
                     x_i = rot.to_local(x_i);  // the grain's frame; all recorded quantities are rotation invariant
                     wi = rot.to_local(wi);
                 }

@@ -246,7 +246,7 @@ public:
         // Start in the host phase at a uniform point, uniform direction; a random burn-in length
         // U(1, 2) * burn_in decorrelates the start frame from this choice.
         for (int tries = 0; tries < 1000; ++tries) {
-            s.p = Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()) * tile_.side();
+            s.p = rng.uniform3<double>() * tile_.side();
             bool in = false;
             tile_.for_each_overlapping(s.p, s.p, [&](const TileSphereRef& ref) {
                 if (glm::length(s.p - ref.center) < R) in = true;
@@ -459,7 +459,7 @@ private:
         const PeriodicTile& tile = agg_.tile();
         Vec3d p(0.0);
         for (int tries = 0; tries < 1000; ++tries) {
-            p = Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>()) * tile.side();
+            p = rng.uniform3<double>() * tile.side();
             bool in = false;
             tile.for_each_overlapping(p, p, [&](const TileSphereRef& ref) {
                 if (glm::length(p - ref.center) < R) in = true;
