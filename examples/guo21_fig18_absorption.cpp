@@ -68,7 +68,7 @@ int main(int argc, char** argv) {
         argc, argv, "guo21_fig18_absorption", "Guo21 Fig. 18: absorbing particles (eta = 1.5 + i eta_i) dim the scattering",
         "out/guo21_fig18_absorption", [&](gl_examples::Example& ex) -> int {
             const int spp = ex.opt<int>("spp", 64, 256, "samples per pixel");
-            const int width = ex.opt<int>("width", 128, 320, "image width (height = 3/4 width)");
+            const int width = ex.opt<int>("width", 128, 512, "image width (height = 3/4 width)");
             const auto count = ex.opt<std::uint64_t>("count", 300000, 300000, "particle count (paper: 3e5)");
             const std::vector<double> etas = ex.opt<std::vector<double>>(
                 "eta-i", std::vector<double>{0, 1e-6, 1e-5, 1e-4, 1e-3}, std::vector<double>{0, 1e-6, 3e-6, 1e-5, 3e-5, 1e-4, 1e-3},

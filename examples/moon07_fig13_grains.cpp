@@ -239,7 +239,7 @@ int main(int argc, char** argv) {
             "presets", "sugar,snow", "exemplar presets (geometry/grains.hpp), comma separated, lossless dielectrics");
         const std::vector<std::string> presets = split_list(presets_text);
         const int level = ex.opt<int>("mesh-level", 2, 3, "subdivision level of the grain meshes");
-        const int W = ex.opt<int>("width", 64, 160, "image width (height = 3/4 width)");
+        const int W = ex.opt<int>("width", 64, 512, "image width (height = 3/4 width)");
         const int H = std::max(1, W * 3 / 4);
         const int spp_pt = ex.opt<int>("spp-pt", 32, "path-tracing samples per pixel per batch");
         const int spp_low = ex.opt<int>("spp-low", 8, "low-order samples per pixel per batch");
