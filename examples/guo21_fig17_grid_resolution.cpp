@@ -105,6 +105,7 @@ int main(int argc, char** argv) {
             t1 = 1e30f;
             return gl::clip_to_box(o, d, gl::Vec3f(lo), gl::Vec3f(hi), t0, t1);
         };
+        const std::uint64_t work_rays = std::min<std::uint64_t>(rays, 20000);  // rays of the work count
         const std::vector<double> ppv_target = {1.0 / 16, 1.0 / 8, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0};
         struct Point {
             std::array<int, 3> res{};
@@ -172,7 +173,6 @@ int main(int argc, char** argv) {
                         out[2] = c / (std::int64_t(rs[0]) * rs[1]);
                     };
                     double steps = 0, tests = 0, members = 0;
-                    const std::uint64_t work_rays = std::min<std::uint64_t>(rays, 20000);
                     for (std::uint64_t r = 0; r < work_rays; ++r) {
                         gl::Rng rng = gl::Rng::from_key(ex.seed(), 11, r);
                         gl::Vec3f o, d;
@@ -265,7 +265,7 @@ int main(int argc, char** argv) {
         std::printf("  work per ray (slab chords, no timing): DDA steps %.1f (finest) .. %.1f (coarsest); particle tests"
                     " %.1f .. %.1f; cylinder members %.3f at every resolution: %s\n",
                     pts[0].steps_per_ray, coarsest.steps_per_ray, pts[0].tests_per_ray, coarsest.tests_per_ray,
-                    pts[0].members / double(std::min<std::uint64_t>(rays, 20000)), members_equal ? "yes" : "NO");
+                    pts[0].members / double(work_rays), members_equal ? "yes" : "NO");
         if (!ex.root()) return ex.finish({});  // only rank 0 writes
         const auto csv_path = ex.csv("guo21_fig17_grid_resolution.csv", csv);
         ex.plot("guo21_fig17_grid_resolution", csv_path, ex.out() / "guo21_fig17_grid_resolution.png");
