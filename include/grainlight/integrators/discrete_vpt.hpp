@@ -11,7 +11,8 @@
 /// Shadow rays at particle events after the first are Russian-rouletted by the phase value toward
 /// the light (DiscreteVptCallbacks::nee_roulette): a shadow gather costs as much as a free flight,
 /// and most light directions of a forward-peaked particle phase carry little (docs/guo21.md,
-/// Fig. 20).
+/// Fig. 20). With Guo21 Sec. 5.5's sampler (DiscreteSampling::global) the events are points of the
+/// ray and NEE uses Eq. 24's Q over the query sphere there (DiscreteParticleMedium::global_nee_factor).
 #pragma once
 
 #include "grainlight/integrators/render.hpp"
@@ -46,6 +47,22 @@ struct DiscreteVptCallbacks : VptCallbacks<Scene> {
     /// Returns true (the path goes on).
     bool on_scatter(PathState<F, S>& st, const Interaction<F, S>& it, const M& m) noexcept {
         this->last_nee = false;
+        // Guo21 Sec. 5.5's sampler (DiscreteSampling::global): the event is a point y of the ray,
+        // not a particle; NEE with Eq. 24's Q over the query sphere at y (global_nee_factor), MIS
+        // against the global phase the direction was sampled from.
+        if constexpr (requires(S& f, F& pdf) {
+                          { m.global_sampling() } -> std::convertible_to<bool>;
+                          m.global_nee_factor(it, st.ray.d, st.ray.d, f, pdf);
+                      }) {
+            if (m.global_sampling()) {
+                if (!this->opt.nee || !it.has_direction) return true;
+                this->last_nee = true;
+                const Vec3<F> d = st.ray.d;
+                this->next_event(st, it.p, it.p,
+                                 [&](const Vec3<F>& w, S& f, F& pdf) { return m.global_nee_factor(it, d, w, f, pdf); });
+                return true;
+            }
+        }
         if constexpr (requires { m.particle_at(it.p); m.phase_eval(0u, it.p, it.p); }) {
             if (!this->opt.nee || !it.has_direction) return true;
             const auto idx = m.particle_at(it.p);

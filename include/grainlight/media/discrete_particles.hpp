@@ -93,6 +93,18 @@ namespace grainlight {
     return (1 + r_p / r_c) * (1 + r_p / r_c) * g;
 }
 
+/// How a DiscreteParticleMedium samples free flights and directions (docs/guo21.md derives both).
+enum class DiscreteSampling {
+    /// At the members of the query cylinder (forced or analog collisions, the member's own phase
+    /// function): energy is conserved for every realization. The default.
+    member,
+    /// Guo21 Sec. 5.5: distances from the global sigma_t, directions from the global (ensemble)
+    /// phase function, weighted by T_A(x, y) Q(y, theta) / (sigma e^{-sigma t} p(theta)) with Q
+    /// from Eq. 24 over the query sphere at y; an escape weighted T_A(x, z) / e^{-sigma z}.
+    /// Unbiased for Eq. 21 per realization; energy is conserved only on average over placements.
+    global,
+};
+
 /// Settings of a DiscreteParticleMedium: wavelength, query-cylinder radius r_c (Guo21 Eq. 23),
 /// diffraction on/off (-FD), radius binning of the per-particle optics, forced-collision floor
 /// q_min and the phase-table resolution. Validated by the DiscreteParticleMedium constructor.
@@ -103,6 +115,7 @@ struct DiscreteMediumSettings {
     int radius_bins = 24;         ///< log-spaced bins per polydisperse species
     double forced_collision = 0.5;  ///< q_min in [0, 1): 0 = analog collisions
     std::size_t theta_nodes_tail = 600;  ///< phase-table angles beyond the forward peak
+    DiscreteSampling sampling = DiscreteSampling::member;  ///< free-flight / direction sampler
 };
 
 /// Optics of one radius bin.
@@ -182,6 +195,8 @@ public:
         check_argument(st.radius_bins >= 1 && st.radius_bins <= 4096, who, "radius_bins", st.radius_bins, "[1, 4096]");
         check_argument(st.forced_collision >= 0 && st.forced_collision < 1, who, "forced_collision", st.forced_collision,
                        "[0, 1)");
+        check_argument(st.sampling == DiscreteSampling::member || st.sampling == DiscreteSampling::global, who, "sampling",
+                       int(st.sampling), "DiscreteSampling::member (0) or DiscreteSampling::global (1)");
         const std::size_t ns = cloud.species_count();
         check_argument(models.size() == ns || models.size() == 1, who, "models.size()", models.size(),
                        "1 or the number of species " + std::to_string(ns));
@@ -224,15 +239,18 @@ public:
                 sb.ct_over_r2.push_back(F(sb.bins.back().C_t_um2 / u2 / (rr * rr)));
                 sb.albedo.push_back(F(sb.bins.back().C_t_um2 > 0 ? sb.bins.back().C_s_um2 / sb.bins.back().C_t_um2 : 0.0));
             }
+            sb.cs_sum.assign(sb.bins.size(), 0.0);
             for (std::uint32_t i = cloud.species_begin(s); i < cloud.species_begin(s + 1); ++i) {
                 const int b = sb.bin_of(cloud[i].r);
                 const double ct = double(sb.ct_over_r2[std::size_t(b)]) * double(cloud[i].r) * double(cloud[i].r);
                 sum_ct += ct;
                 sum_cs += ct * double(sb.albedo[std::size_t(b)]);
+                sb.cs_sum[std::size_t(b)] += ct * double(sb.albedo[std::size_t(b)]);
             }
         }
         sigma_t_ = sum_ct / cloud.volume();
         sigma_s_ = sum_cs / cloud.volume();
+        build_global_phase();
     }
 
     /// The particle grid the medium gathers through (shared, not copied).
@@ -248,6 +266,10 @@ public:
     [[nodiscard]] double global_sigma_t() const noexcept { return sigma_t_; }
     /// Bulk (global) sigma_s = sum_i C_s,i / V [1/scene unit] (see global_sigma_t()).
     [[nodiscard]] double global_sigma_s() const noexcept { return sigma_s_; }
+    /// Global (ensemble) phase function of the cloud: sum_i C_s,i f_i / sum_i C_s,i over every
+    /// particle (Eq. 17 over the whole domain, Guo21 Sec. 5.5), tabulated on the union of the
+    /// species' angle grids. DiscreteSampling::global samples directions from it.
+    [[nodiscard]] const MiePhase<F, S>& global_phase() const noexcept { return global_phase_; }
     /// Number of species (one optics set per species).
     [[nodiscard]] std::size_t species_count() const noexcept { return species_.size(); }
     /// Radius bins of species `species` (< species_count(); not checked), in order of radius.
@@ -318,6 +340,7 @@ public:
     /// A free flight (see the file comment).
     [[nodiscard]] Interaction<F, S> sample_interaction(const Ray<F>& ray, F t_max, Rng& rng) const noexcept {
         Interaction<F, S> it;
+        if (st_.sampling == DiscreteSampling::global) return sample_global(ray, t_max, rng);
         if (st_.forced_collision == 0) return sample_analog(ray, t_max, rng);
         // Pass 1: tau of the segment (P = 1 - e^{-tau}; beyond tau = 40 it is 1 in float and the
         // gather stops after the current voxel), keeping up to kBuffer members so that pass 2 is
@@ -383,6 +406,22 @@ public:
         return collision_event(ray, t_max, chosen, s_chosen, P / q, F(0), rng);
     }
 
+    /// True if the medium samples as Guo21 Sec. 5.5 (DiscreteSampling::global).
+    [[nodiscard]] bool global_sampling() const noexcept { return st_.sampling == DiscreteSampling::global; }
+    /// NEE at an event of DiscreteSampling::global (integrators/discrete_vpt.hpp): the factor f that
+    /// turns the path throughput after the event (which carries Q(theta_s) / p(theta_s) of the
+    /// sampled direction it.w) into that of the light direction w, f = Q(y, w_in -> w) p(theta_s) /
+    /// Q(y, w_in -> it.w), and the global phase's pdf of w (the MIS partner). False if the event
+    /// carries no Q (never for an event sample_global returned as a scatter).
+    [[nodiscard]] bool global_nee_factor(const Interaction<F, S>& it, const Vec3<F>& w_in, const Vec3<F>& w, S& f,
+                                         F& pdf) const noexcept {
+        const F q_s = query_sphere_q(it.p, w_in, it.w);
+        if (!(q_s > F(0)) || !(it.direction_pdf > F(0))) return false;
+        f = S(query_sphere_q(it.p, w_in, w) * it.direction_pdf / q_s);
+        pdf = global_phase_.eval(w_in, w).pdf;
+        return pdf > F(0);
+    }
+
     /// Memory of the cloud + grid [bytes].
     [[nodiscard]] std::size_t memory_bytes() const noexcept { return cloud().memory_bytes() + grid_->memory_bytes(); }
 
@@ -391,12 +430,77 @@ private:
         double log_rmin = 0, inv_dlog = 0;
         std::vector<Bin> bins;
         std::vector<F> ct_over_r2, albedo;
+        std::vector<double> cs_sum;  // sum of C_s over the bin's particles [scene units^2]
         [[nodiscard]] int bin_of(float r) const noexcept {
             if (bins.size() <= 1) return 0;
             const int b = int((std::log(double(r)) - log_rmin) * inv_dlog);
             return std::clamp(b, 0, int(bins.size()) - 1);
         }
     };
+
+    /// The global phase: each bin's normalised phase weighted by the bin's sum of C_s, on the
+    /// sorted union of the species' angle grids.
+    void build_global_phase() {
+        std::vector<double> theta;
+        for (const SpeciesBins& sb : species_)
+            if (!sb.bins.empty()) {
+                const auto g = sb.bins.front().phase.theta_grid();
+                theta.insert(theta.end(), g.begin(), g.end());
+            }
+        std::sort(theta.begin(), theta.end());
+        theta.erase(std::unique(theta.begin(), theta.end(), [](double a, double b) { return b - a < 1e-12; }), theta.end());
+        std::vector<S> v(theta.size(), S(F(0)));
+        for (std::size_t k = 0; k < theta.size(); ++k) {
+            const double mu = std::cos(theta[k]);
+            double acc = 0;
+            for (const SpeciesBins& sb : species_)
+                for (std::size_t b = 0; b < sb.bins.size(); ++b)
+                    if (sb.cs_sum[b] > 0) acc += sb.cs_sum[b] * sb.bins[b].phase.pdf_cos_theta(mu);
+            v[k] = S(F(acc));
+        }
+        global_phase_ = MiePhase<F, S>::from_intensities(theta, v);
+    }
+
+    /// Guo21 Sec. 5.5 (DiscreteSampling::global): t ~ sigma e^{-sigma t} with the global sigma_t;
+    /// beyond t_max an escape of weight T_A(x, z) e^{sigma z}; otherwise the direction from the
+    /// global phase p and the weight T_A(x, y) Q(y, theta) / (sigma e^{-sigma t} p(theta)), Q from
+    /// Eq. 24 over the query sphere at y. An empty sphere has Q = 0 (Eq. 22: nothing scatters at
+    /// y; the light that goes on unscattered is T_A's): the sample ends with weight 0. Unbiased for
+    /// Eq. 21 (docs/guo21.md: continuing the ray at an empty sphere with these denominators would
+    /// count the unscattered light twice). T_A is gathered up to an optical depth of sigma t + 110,
+    /// beyond which the weight is below float's range anyway; the exponent is capped at 80 (an
+    /// escape that far beyond the mean has probability < e^{-80}).
+    [[nodiscard]] Interaction<F, S> sample_global(const Ray<F>& ray, F t_max, Rng& rng) const noexcept {
+        Interaction<F, S> it;
+        const double sg = sigma_t_;
+        const double u = double(rng.uniform<F>());
+        const double t = sg > 0 ? -std::log1p(-std::min(u, 1.0 - 1e-12)) / sg : std::numeric_limits<double>::infinity();
+        if (!(t < double(t_max))) {
+            const double tau = double(optical_depth(ray, t_max, F(sg * double(t_max) + 110)));
+            it.kind = EventKind::escape;
+            it.t = t_max;
+            it.p = ray(t_max);
+            it.weight = S(F(std::exp(std::min(sg * double(t_max) - tau, 80.0))));
+            return it;
+        }
+        const F tf = F(t);
+        it.t = tf;
+        it.p = ray(tf);
+        it.kind = EventKind::absorb;
+        it.weight = S(F(0));
+        const auto ps = global_phase_.sample(ray.d, rng.template uniform2<F>());
+        if (!ps || !(ps.pdf > F(0))) return it;
+        const F q = query_sphere_q(it.p, ray.d, ps.w);
+        if (!(q > F(0))) return it;  // Eq. 22's empty sphere (see above)
+        const double tau = double(optical_depth(ray, tf, F(sg * t + 110)));
+        it.kind = EventKind::scatter;
+        it.has_direction = true;
+        it.w = ps.w;
+        it.direction_pdf = ps.pdf;
+        it.nee = NeeKind::none;
+        it.weight = S(F(std::exp(std::min(sg * t - tau, 80.0)) / sg * double(q) / double(ps.pdf)));
+        return it;
+    }
 
     /// Analog free flight (forced_collision = 0) in one pass: tau* ~ Exp(1) is drawn first and the
     /// members are walked in order of s until their cumulative optical depth reaches it, so the
@@ -516,6 +620,7 @@ private:
     std::vector<SpeciesBins> species_;
     F r_c_ = 0, inv_area_ = 0;
     double sigma_t_ = 0, sigma_s_ = 0;
+    MiePhase<F, S> global_phase_;
 };
 
 /// Homogeneous grey medium with forced collisions (the paired continuous medium of Guo21
