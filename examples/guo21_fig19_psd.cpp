@@ -70,8 +70,8 @@ int main(int argc, char** argv) {
     return gl_examples::run(
         argc, argv, "guo21_fig19_psd", "Guo21 Fig. 19: the look of a discrete medium changes with the PSD",
         "out/guo21_fig19_psd", [&](gl_examples::Example& ex) -> int {
-            const int spp = ex.opt<int>("spp", 16, 256, "samples per pixel (two seeded halves; the continuous pairs: 4x)");
-            const int width = ex.opt<int>("width", 64, 320, "image width (height = 3/4 width)");
+            const int spp = ex.opt<int>("spp", 16, 32, "samples per pixel (two seeded halves; the continuous pairs: 4x)");
+            const int width = ex.opt<int>("width", 64, 512, "image width (height = 3/4 width)");
             const auto count = ex.opt<std::uint64_t>("count", 1000000, 4000000, "particles per PSD (paper: 4e6; bimodal 5x at full)");
             const double k_q = ex.opt<double>("k", 0.25, "query-cylinder scale k of Eq. 23 (r_c = k/2 x the pixel footprint at the cube)");
             const bool diffraction =
