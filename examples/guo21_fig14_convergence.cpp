@@ -9,7 +9,11 @@
 //
 //   guo21_fig14_convergence [--quality quick|full] [--out DIR] [--seed S] [--threads N]
 //                           [--spp N] [--width W] [--counts 1e4,1e5,...] [--query-radius-mm R]
-//                           [--checkpoint SECONDS] [--resume]
+//                           [--sampling member|global] [--checkpoint SECONDS] [--resume]
+//
+// --sampling global renders the discrete media with Guo21 Sec. 5.5's estimator (free flights from
+// the global sigma_t, directions from the global phase, Eq. 24's query-sphere Q; NEE with that Q)
+// instead of the default collisions at the query cylinder's members (docs/guo21.md compares them).
 //
 // On the example harness: with --checkpoint every render keeps a checkpoint in --out, so a killed
 // full-quality run (N = 1e7) resumes with --resume where it stopped (images byte-identical to an
@@ -85,9 +89,15 @@ int main(int argc, char** argv) {
         const bool mixture = ex.opt<bool>("mixture", false,
                                           "on: a two-species cloud (half ice r = 10 um, half eta = 1.5 log-normal r_g = 6 um, "
                                           "sigma_g = 1.4 in [2, 20] um) against the continuous medium of the mixed bulk properties");
+        const std::string sampling = ex.opt<std::string>(
+            "sampling", "member",
+            "member: collisions at the query cylinder's members (default); global: Guo21 Sec. 5.5's sampler (global "
+            "sigma_t and phase, Eq. 24's sphere Q)");
         ex.checkpointable();
         ex.ready();
         guo21_mpi::quiet_other_ranks(ex);
+        if (sampling != "member" && sampling != "global")
+            throw gl_examples::cli_error("--sampling = '" + sampling + "' must be member or global");
         const auto& out = ex.out();
         if (width < 8 || width > 8192) throw gl_examples::cli_error("--width must be in [8, 8192]");
         const int height = width * 3 / 4;
@@ -200,6 +210,7 @@ int main(int argc, char** argv) {
             gl::DiscreteMediumSettings ms;
             ms.query_radius = r_c;
             ms.wavelength_um = lambda;
+            ms.sampling = sampling == "global" ? gl::DiscreteSampling::global : gl::DiscreteSampling::member;
             using DMed = gl::DiscreteParticleMedium<float>;
             gl::Scene<DMed> dsc;
             build_scene(dsc, dsc.add_medium(DMed(grid, mixture ? std::vector<gl::ParticleModel>{model, model2}
@@ -261,6 +272,7 @@ int main(int argc, char** argv) {
             .num("k_equivalent", k_equiv)
             .num("membership_factor", factor)
             .integer("mixture", mixture ? 1 : 0)
+            .str("sampling", sampling)
             .num("C_t_species1_um2", C_t1 * 1e12)
             .num("C_t_species2_um2", C_t2 * 1e12)
             .num("share_species2", share2)
