@@ -13,6 +13,10 @@ if(TARGET guo21_fig14_convergence)
     CHECKS "max_abs_rel_diff <= 0.05;rel_rmse_falls == 1;rel_rmse_last < 0.8 * rel_rmse_first;membership_factor < 1.02;query_radius_over_particle_radius >= 100;bytes_per_particle_max < 64"
     EXPECT_FILE ${_g14out}/guo21_fig14_convergence.csv
     BAD_NAME guo21_fig14_convergence_bad_counts BAD_REGEX "counts" BAD_ARGS --counts 0 --out ${_g14out})
+  add_test(NAME guo21_fig14_convergence_bad_sampling
+           COMMAND guo21_fig14_convergence --sampling delta --out ${_g14out})
+  set_tests_properties(guo21_fig14_convergence_bad_sampling PROPERTIES LABELS "example;discrete"
+    PASS_REGULAR_EXPRESSION "--sampling")
 endif()
 if(TARGET guo21_fig12_cornell)
   set(_g12out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig12_out)
