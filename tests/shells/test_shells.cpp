@@ -25,6 +25,7 @@
 #include "grainlight/core/statistics.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/media/shell.hpp"
+#include "grainlight/packing/md_packer.hpp"
 #include "grainlight/packing/poisson.hpp"
 #include "grainlight/phase/henyey_greenstein.hpp"
 #include "grainlight/precompute/shell_builder.hpp"
@@ -380,6 +381,50 @@ TEST_CASE("Index-matched absorbing spheres: absorption within the stereological 
     }
     CHECK_THROWS_AS(SpherePackingShellSource(tile, -1.0, 0.0, 1.0), invalid_argument);
     CHECK_THROWS_AS(SpherePackingShellSource(tile, 1.5, 0.0, 0.0), invalid_argument);
+}
+
+TEST_CASE("MD-packed spheres as a shell source: the packing's own volume fraction, denser than RSA",
+          "[shells][packing][md]") {
+    // Moon07 Sec. 5's closely packed glass spheres from the event-driven MD packer (Meng15's
+    // packings, packing/md_packer.hpp) at f = 0.55, beyond random sequential addition's ~0.38.
+    // Index matched + absorbing: the stereological bounds of the RSA test above with the MD tile's
+    // fraction; with sigma_a r = 0.2 they are narrow (0.0998 .. 0.1042 at r = 4 R), and the RSA tile's
+    // (f = 0.3: at most 0.058) is excluded. Glass (eta = 1.5): every shell scatters more than in the
+    // RSA packing (more interfaces per length), and f_a = p_unscattered.
+    const MdPackResult md = md_pack(64, 0.55, 7);
+    REQUIRE(md.fraction == Approx(0.55).margin(0.005));
+    const PeriodicTile& tile = md.tile;
+    const double f_pack = tile.packing_fraction();
+    const double R = tile.radius(), sigma_a = 0.05 / R;
+    const std::vector<double> radii{2 * R, 4 * R};
+    const ShellSamples s =
+        collect_shell_samples(SpherePackingShellSource(tile, 1.0, sigma_a, 10 * R), radii, 60000, 3, 64, 8 * R);
+    const ShellTable t = build_shell_table(s).table;
+    for (std::size_t i = 0; i < radii.size(); ++i) {
+        CHECK(s.n_scattered(i) == 0);
+        const double r = radii[i];
+        const double upper = 1 - std::exp(-sigma_a * f_pack * r), lower = f_pack * (1 - std::exp(-sigma_a * r));
+        const double se = std::sqrt(upper * (1 - upper) / double(t.n_paths));
+        INFO("MD f = " << f_pack << ", shell " << i << ": p_absorbed " << t.p_absorbed[i] << " +- " << se << ", bounds "
+                       << lower << " .. " << upper << ", RSA f = 0.3 upper " << 1 - std::exp(-sigma_a * 0.3 * r));
+        CHECK(t.p_absorbed[i] >= lower - 4 * se);
+        CHECK(t.p_absorbed[i] <= upper + 4 * se);
+        CHECK(t.p_absorbed[i] > 1 - std::exp(-sigma_a * 0.3 * r) + 4 * se);
+    }
+    // The RSA tile of the same sphere radius (64 spheres at f = 0.3: side R (4 pi 64 / (3 * 0.3))^(1/3)).
+    Rng prng = Rng::from_key(2);
+    const PeriodicTile rsa = random_sequential_addition(64, 0.3, prng, R * std::cbrt(4 * pi_v<double> * 64 / (3 * 0.3)));
+    REQUIRE(rsa.radius() == Approx(R).epsilon(1e-9));
+    const ShellSamples gm = collect_shell_samples(SpherePackingShellSource(tile, 1.5, 0.0, 10 * R), radii, 20000, 4, 64, 8 * R);
+    const ShellSamples gr = collect_shell_samples(SpherePackingShellSource(rsa, 1.5, 0.0, 10 * R), radii, 20000, 4, 64, 8 * R);
+    const ShellTable tm = build_shell_table(gm).table, tr = build_shell_table(gr).table;
+    ShellMedium<double> mm(tm);
+    for (std::size_t i = 0; i < radii.size(); ++i) {
+        INFO("shell " << i << ": p_unscattered MD " << tm.p_unscattered[i] << ", RSA " << tr.p_unscattered[i]);
+        CHECK(tm.p_absorbed[i] == 0.0);
+        CHECK(tm.p_unscattered[i] < tr.p_unscattered[i] - 0.02);
+        CHECK(mm.attenuation(radii[i]) == Approx(tm.p_unscattered[i]).margin(0.01));
+    }
 }
 
 TEST_CASE("Glass-sphere tables keep the forward peak of small shells (equal theta_1 cells)", "[shells][forward]") {
