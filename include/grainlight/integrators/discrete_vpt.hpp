@@ -15,6 +15,8 @@
 /// ray and NEE uses Eq. 24's Q over the query sphere there (DiscreteParticleMedium::global_nee_factor).
 #pragma once
 
+#include <concepts>
+
 #include "grainlight/integrators/render.hpp"
 #include "grainlight/integrators/vpt.hpp"
 #include "grainlight/integrators/walk.hpp"
