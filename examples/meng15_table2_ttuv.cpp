@@ -107,6 +107,7 @@ struct RunConfig {
     double pa_pinned = 0;  ///< --pa: P_a of the "P_a opt" rows without a preview (0: preview)
     int min_ept = 1;       ///< --min-ept: grain interactions in EPT before a path may switch
     double tau = 4.0;      ///< --tau: Eq. 5's bundle-spread threshold [grain radii]
+    double switch_depth = 0;  ///< --switch-depth: smallest boundary distance of a switch [grain radii]
 };
 
 // One scene: one or more panels (equal sizes) measured as one image (meng15_scenes.hpp).
@@ -137,6 +138,7 @@ SceneResult run_scene(const Example& ex, const std::string& key, const std::vect
         opt.vpt.max_depth = rc.vpt_depth;
         opt.min_ept_interactions = rc.min_ept;
         opt.tau = rc.tau;
+        opt.min_switch_depth = rc.switch_depth;  // grain radius 1 in every scene
         double Pa = 1.0;
         std::vector<double> Pa_panel;
         if (t.opt && rc.pa_pinned > 0) {
@@ -268,6 +270,8 @@ int main(int argc, char** argv) {
         const int vpt_depth = ex.opt<int>("vpt-depth", 4096, "VPT scattering + surface events per path at most");
         const int min_ept = ex.opt<int>("min-ept", 1, "grain interactions in EPT before a path may switch (Meng15 Sec. 6: 1)");
         const double tau = ex.opt<double>("tau", 4.0, "Eq. 5's bundle-spread threshold tau [grain radii] (Meng15: 4)");
+        const double switch_depth = ex.opt<double>(
+            "switch-depth", 0.0, "switch to VPT only at least this far inside the boundary [grain radii] (Meng15: 0)");
         const auto pa_given = ex.opt_optional<double>(
             "pa", "pin P_a of the 'P_a opt' techniques to this value in (0, 1] (no preview; reproducible images)");
         ex.checkpointable();  // --checkpoint SECONDS / --resume: one checkpoint per scene, technique and panel
@@ -279,6 +283,8 @@ int main(int argc, char** argv) {
         if (pa_given && !(*pa_given > 0.0 && *pa_given <= 1.0)) throw cli_error("--pa = " + ex.given_text("pa") + " must be in (0, 1]");
         if (min_ept < 1 || min_ept > 1000) throw cli_error("--min-ept = " + ex.given_text("min-ept") + " must be in [1, 1000]");
         if (!(tau > 0 && tau <= 1e6)) throw cli_error("--tau = " + ex.given_text("tau") + " must be in (0, 1e6]");
+        if (!(switch_depth >= 0 && switch_depth <= 1e6))
+            throw cli_error("--switch-depth = " + ex.given_text("switch-depth") + " must be in [0, 1e6]");
         if (spp < 8 || spp > 4096) throw cli_error("--spp must be in [8, 4096] (measuring.md: >= 8 batches)");
         if (width < 8 || width > 2048) throw cli_error("--width must be in [8, 2048]");
         if (!(size >= 10 && size <= 5000)) throw cli_error("--size must be in [10, 5000] grain radii");
@@ -313,6 +319,7 @@ int main(int argc, char** argv) {
         rc.vpt_depth = vpt_depth;
         rc.min_ept = min_ept;
         rc.tau = tau;
+        rc.switch_depth = switch_depth;
         const int height = std::max(6, width * 3 / 4);
 
         const meng15::Grains g = meng15::make_snow_grains(ex.seed(), ex.full(), absorption, level);

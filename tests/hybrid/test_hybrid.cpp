@@ -366,6 +366,33 @@ TEST_CASE("Eq. 5: bundle spread and the switch criterion", "[hybrid][criterion]"
     });
     REQUIRE(sw4 > 100);
     REQUIRE(double(d4) / double(sw4) > 1.5);
+
+    // min_switch_depth: no switch closer than d to the boundary (the sphere's distance is 6 - |x|);
+    // with d = 0 (Meng15's rule) many paths switch in that shell, so the check can fail.
+    for (double d : {0.0, 2.0}) {
+        HybridOptions o;
+        o.tau = 1e-9;
+        o.min_switch_depth = d;
+        std::uint64_t n_sw = 0, shallow = 0;
+        for_each_bundle(40, 16, 6.0, 0.5, 53, [&](const Ray<float>* rays, Rng* rngs) {
+            const auto b = hybrid_bundle(sc.ept, sc.vpt, agg, ctx, rays, rngs, 16, o);
+            for (int i = 0; i < 16; ++i) {
+                const auto& p = b.path[std::size_t(i)];
+                if (!p.switched) continue;
+                ++n_sw;
+                shallow += 6.0 - glm::length(p.switch_point) < 2.0;
+            }
+        });
+        INFO("min_switch_depth " << d << ": " << shallow << " of " << n_sw << " switches within 2 of the boundary");
+        REQUIRE(n_sw > 100);
+        if (d == 0.0)
+            REQUIRE(double(shallow) > 0.3 * double(n_sw));
+        else
+            REQUIRE(shallow == 0);
+    }
+    HybridOptions bad;
+    bad.min_switch_depth = -1.0;
+    REQUIRE_THROWS_WITH(bad.validate("test"), Catch::Contains("min_switch_depth"));
 }
 
 TEST_CASE("P_a that never loses: robust preview moments and the resolved-gain rule", "[hybrid][acceptance]") {

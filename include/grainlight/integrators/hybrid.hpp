@@ -198,6 +198,12 @@ struct HybridOptions {
     int bundle_size = 16;           ///< N: paths per bundle (1..64)
     double tau = 4.0;               ///< Eq. 5 threshold in grain (bounding-sphere) radii
     int min_ept_interactions = 1;   ///< grain interactions in EPT before a path may switch
+    /// Smallest distance from the boundary (world units) at which a path may switch: the grain hit
+    /// must satisfy ball_inside(ctx.distance, x, min_switch_depth). 0 (default): Meng15's rule,
+    /// any grain hit inside the boundary. The effective medium's exponential flights misstate the
+    /// first flights out of a shallow grain layer (docs/meng15_hybrid.md, Fig. 1), which biases
+    /// low-albedo aggregates whose light comes back from a few grain layers.
+    double min_switch_depth = 0.0;
     bool switch_single = true;      ///< arm the bundle when only one path remains
     double acceptance = 1.0;        ///< P_a in (0, 1]
     EptOptions ept{};               ///< EPT part (events budget, roulette, NEE)
@@ -221,6 +227,8 @@ struct HybridOptions {
         check_argument(bundle_size >= 1 && bundle_size <= 64, where, "bundle_size", bundle_size, "[1, 64]");
         check_argument(tau > 0.0, where, "tau", tau, "(0, inf] (grain radii)");
         check_argument(min_ept_interactions >= 0, where, "min_ept_interactions", min_ept_interactions, ">= 0");
+        check_argument(min_switch_depth >= 0.0 && std::isfinite(min_switch_depth), where, "min_switch_depth", min_switch_depth,
+                       "[0, inf) (world units)");
         check_argument(acceptance > 0.0 && acceptance <= 1.0, where, "acceptance", acceptance, "(0, 1]");
         check_argument(max_da_restarts >= 0, where, "max_da_restarts", max_da_restarts, ">= 0");
     }
@@ -586,6 +594,7 @@ struct HybridPathRadiance {
     S da{0.0f};             ///< the part of `high` gathered after a DA connection
     bool switched = false;  ///< switched (or, in mode ept, reached the would-be switch)
     int switch_order = 0;   ///< grain interactions in EPT before the switch
+    Vec3d switch_point{0.0};  ///< the grain hit where the path switched (valid when `switched`)
 };
 
 /// A bundle's result: per-path radiances and the CPU seconds of the two parts.
@@ -675,8 +684,10 @@ template <LitScene Scene, BoundaryShape Shape, class Distance>
             auto policy = [&](const EptPathState<S>& st, const Vec3d& x, bool same) {
                 if (!armed || st.high || same || st.order < opt.min_ept_interactions || !agg.boundary().shape().inside(x))
                     return EptSwitch::stay;
+                if (opt.min_switch_depth > 0.0 && !ball_inside(ctx.distance, x, opt.min_switch_depth)) return EptSwitch::stay;
                 path.switched = true;
                 path.switch_order = st.order;
+                path.switch_point = x;
                 // Mode ept: only the split changes.
                 return opt.mode != HybridMode::ept ? EptSwitch::switch_here : EptSwitch::high_from_here;
             };
