@@ -330,19 +330,26 @@ TEST_CASE("Eq. 5: bundle spread and the switch criterion", "[hybrid][criterion]"
     const Scenes sc = make_scenes(make_effective_medium<float, RGB>(stats, tile.packing_fraction(), tile.radius()), shape,
                                   RGB(1.0f));
     const HybridContext<BoundaryDistance<SphereBoundary>> ctx{sc.medium, sc.shape, {shape}, nullptr};
+    // 40 bundles of 16 paths aimed at the sphere: calls on_switch for every path that switched and
+    // returns the bundles' switch counter.
+    auto for_each_switch = [&](const HybridOptions& o, std::uint64_t seed, auto&& on_switch) {
+        std::uint64_t switched = 0;
+        for_each_bundle(40, 16, 6.0, 0.5, seed, [&](const Ray<float>* rays, Rng* rngs) {
+            const auto b = hybrid_bundle(sc.ept, sc.vpt, agg, ctx, rays, rngs, 16, o);
+            for (int i = 0; i < 16; ++i)
+                if (b.path[std::size_t(i)].switched) on_switch(b.path[std::size_t(i)]);
+            switched += b.counters.switched;
+        });
+        return switched;
+    };
     for (int min_ept : {1, 3}) {
         HybridOptions opt;
         opt.tau = 1e-9;
         opt.min_ept_interactions = min_ept;
-        std::uint64_t switched = 0, first = 0;
-        for_each_bundle(40, 16, 6.0, 0.5, 51, [&](const Ray<float>* rays, Rng* rngs) {
-            const auto b = hybrid_bundle(sc.ept, sc.vpt, agg, ctx, rays, rngs, 16, opt);
-            for (int i = 0; i < 16; ++i)
-                if (b.path[std::size_t(i)].switched) {
-                    REQUIRE(b.path[std::size_t(i)].switch_order >= min_ept);
-                    first += b.path[std::size_t(i)].switch_order == min_ept;
-                }
-            switched += b.counters.switched;
+        std::uint64_t first = 0;
+        const std::uint64_t switched = for_each_switch(opt, 51, [&](const auto& p) {
+            REQUIRE(p.switch_order >= min_ept);
+            first += p.switch_order == min_ept;
         });
         INFO("min_ept " << min_ept << ": " << first << " of " << switched << " switched at the first allowed grain");
         REQUIRE(switched > 100);
@@ -374,14 +381,9 @@ TEST_CASE("Eq. 5: bundle spread and the switch criterion", "[hybrid][criterion]"
         o.tau = 1e-9;
         o.min_switch_depth = d;
         std::uint64_t n_sw = 0, shallow = 0;
-        for_each_bundle(40, 16, 6.0, 0.5, 53, [&](const Ray<float>* rays, Rng* rngs) {
-            const auto b = hybrid_bundle(sc.ept, sc.vpt, agg, ctx, rays, rngs, 16, o);
-            for (int i = 0; i < 16; ++i) {
-                const auto& p = b.path[std::size_t(i)];
-                if (!p.switched) continue;
-                ++n_sw;
-                shallow += 6.0 - glm::length(p.switch_point) < 2.0;
-            }
+        (void)for_each_switch(o, 53, [&](const auto& p) {
+            ++n_sw;
+            shallow += 6.0 - glm::length(p.switch_point) < 2.0;
         });
         INFO("min_switch_depth " << d << ": " << shallow << " of " << n_sw << " switches within 2 of the boundary");
         REQUIRE(n_sw > 100);

@@ -200,9 +200,9 @@ struct HybridOptions {
     int min_ept_interactions = 1;   ///< grain interactions in EPT before a path may switch
     /// Smallest distance from the boundary (world units) at which a path may switch: the grain hit
     /// must satisfy ball_inside(ctx.distance, x, min_switch_depth). 0 (default): Meng15's rule,
-    /// any grain hit inside the boundary. The effective medium's exponential flights misstate the
-    /// first flights out of a shallow grain layer (docs/meng15_hybrid.md, Fig. 1), which biases
-    /// low-albedo aggregates whose light comes back from a few grain layers.
+    /// any grain hit inside the boundary. Near the boundary the effective medium misstates the
+    /// light that comes back from the first few grain layers, which biases VPT low on low-albedo
+    /// aggregates (measured on the sandcastle: docs/meng15_hybrid.md, Fig. 1).
     double min_switch_depth = 0.0;
     bool switch_single = true;      ///< arm the bundle when only one path remains
     double acceptance = 1.0;        ///< P_a in (0, 1]

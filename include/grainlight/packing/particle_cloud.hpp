@@ -198,7 +198,8 @@ public:
     /// Pcg32::from_key(seed, s, i) until its sphere is disjoint from every earlier one (a hash
     /// grid of cells >= 2 r_max). Deterministic for a seed. Throws grainlight::invalid_argument
     /// naming `count` when a particle finds no free place in `max_tries` draws (the packing is
-    /// near RSA's jamming limit, ~38 % by volume for equal spheres).
+    /// near RSA's jamming limit, ~38 % by volume for equal spheres). The placed cloud is then
+    /// stored in spatial order, as generate()'s (sort_spatially()).
     template <BoundaryShape Shape>
     static ParticleCloud generate_non_overlapping(const Shape& shape, std::uint64_t count,
                                                   const std::vector<CloudSpecies>& species, std::uint64_t seed,
