@@ -223,8 +223,20 @@ public:
             }
             break;
         }
+        it = grain_interaction(ray(F(t)), ray.d, rng);
         it.t = F(t);
-        const Vec3<F> x_i = ray(F(t));
+        return it;
+    }
+
+    /// One grain interaction of the TT process at the bounding-sphere entry point `x_i` with unit
+    /// incident direction `d` (the second half of `sample_interaction`, for an integrator that
+    /// found the grain itself, e.g. a hybrid that leaves explicit grains at a grain hit): `absorb`
+    /// at x_i with probability 1 - alpha_s (channel mean), else `scatter` with the exit point
+    /// x_o = x_i + R * offset and the exit direction drawn jointly from the scatterometer table,
+    /// and the per-channel weight as in sample_interaction. `t` is 0.
+    [[nodiscard]] Interaction<F, Spectrum> grain_interaction(const Vec3<F>& x_i, const Vec3<F>& d_in, Rng& rng) const noexcept {
+        Interaction<F, Spectrum> it;
+        it.t = F(0);
         if (!(rng.uniform<double>() < survive_)) {
             it.kind = EventKind::absorb;
             it.p = x_i;
@@ -244,7 +256,7 @@ public:
         const double dphi = ScatterometerGrid::dphi_center(std::uint32_t(i_dp), std::uint32_t(n_dp)) +
                             (rng.uniform<double>() - 0.5) * 2.0 * pi_v<double> / double(n_dp);
         const double phi_dir = phi_offset + dphi;
-        const Vec3d d(ray.d);
+        const Vec3d d(d_in);
         const Frame<double> frame(d);
         const Vec3d offset = along * d + across * (std::cos(phi_offset) * frame.s + std::sin(phi_offset) * frame.t);
         it.kind = EventKind::scatter;
