@@ -25,6 +25,7 @@
 #include "grainlight/geometry/grains.hpp"
 #include "grainlight/geometry/procedural_boundaries.hpp"
 #include "grainlight/integrators/hybrid.hpp"
+#include "grainlight/integrators/hybrid_calibration.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/media/teleportation.hpp"
 #include "grainlight/packing/md_packer.hpp"
@@ -107,6 +108,34 @@ inline SceneT make_lit_scene(float R) {
     return sc;
 }
 
+/// The explicit grain interactions the hybrid must keep before a switch for grains `g`
+/// (integrators/hybrid_calibration.hpp: a half-space of these grains, EPT against the hybrid's
+/// VPT continuation after k = 1..6 interactions, the smallest k within `tolerance`). Prints one
+/// line labelled `name`.
+inline int calibrate_min_ept(const Grains& g, std::uint64_t seed, int threads, const std::string& name, double tolerance = 0.03) {
+    const double absorbed = 1.0 - std::min({g.rte.alpha_s[0], g.rte.alpha_s[1], g.rte.alpha_s[2]});
+    if (absorbed < 2e-3) {
+        // A half-space of (nearly) lossless grains returns (nearly) all light in both EPT and the
+        // effective medium: no bias to measure, and its paths are very long.
+        std::printf("  %s: albedo >= %.4f, switch calibration skipped (a lossless half-space returns all light) -> min_ept 1\n",
+                    name.c_str(), 1.0 - absorbed);
+        return 1;
+    }
+    gl::SwitchCalibrationOptions o;
+    o.seed = seed;
+    o.threads = threads;
+    o.tolerance = tolerance;
+    const gl::SwitchCalibration c = gl::calibrate_min_ept_interactions(
+        g.tile, {gl::GrainExemplar::procedural(g.preset.shape, g.preset.radius, g.preset.material, g.preset.seed, g.level)}, {1.0},
+        seed, g.medium, o);
+    std::printf("  %s: switch calibration in a half-space of its grains (EPT reflectance %.3f, %llu paths per angle at 0 and 60 deg): "
+                "bias of switching after k interactions",
+                name.c_str(), c.reflectance_ept, (unsigned long long)c.paths);
+    for (const auto& b : c.by_k) std::printf(" k=%d %+.1f+-%.1f%%", b.k, 100 * b.rel_diff, 100 * b.stderr_rel);
+    std::printf(" -> min_ept %d%s\n", c.min_ept_interactions, c.resolved ? "" : " (not resolved at 2 standard errors)");
+    return c.min_ept_interactions;
+}
+
 /// One panel of an image: an aggregate, its EPT / VPT scenes, the hybrid context and a camera
 /// (all owned by the caller).
 template <class Shape, class Distance, class Camera>
@@ -117,6 +146,7 @@ struct Panel {
     const SceneT* vpt = nullptr;
     const gl::HybridContext<Distance>* ctx = nullptr;
     const Camera* camera = nullptr;
+    int min_ept = 0;  ///< explicit grain interactions before a switch for this panel's grains (0: the options')
 };
 
 /// Rank 0 prints the tables and the summary line; the other ranks' stdout goes to /dev/null (their
@@ -227,9 +257,11 @@ Composite render_panels(const Example& ex, const std::vector<Panel<Shape, Distan
     for (std::size_t k = 0; k < panels.size(); ++k) {
         const auto& p = panels[k];
         if (k < P_a.size()) opt.acceptance = P_a[k];
+        gl::HybridOptions po = opt;
+        if (p.min_ept > 0) po.min_ept_interactions = p.min_ept;
         const std::string name = label + (panels.size() > 1 ? " " + p.name : std::string());
         // Each panel its own generator stream (seed + k): panels are independent images.
-        imgs.push_back(render_hybrid_run(ex, name, *p.ept, *p.vpt, *p.agg, *p.ctx, *p.camera, spp, seed + 7919 * k, opt, name));
+        imgs.push_back(render_hybrid_run(ex, name, *p.ept, *p.vpt, *p.agg, *p.ctx, *p.camera, spp, seed + 7919 * k, po, name));
     }
     return compose(std::move(imgs));
 }
@@ -265,6 +297,7 @@ struct MeshPanel {
     gl::HybridContext<gl::MeshDistance> ctx;
     gl::PinholeCamera<float> camera;
     double grain_count = 0;  ///< grains in the aggregate: f x volume / (4/3 pi) (unit grain radius)
+    int min_ept = 0;         ///< Panel::min_ept
 };
 
 /// A mesh panel under make_lit_scene(light_scale).
@@ -314,7 +347,7 @@ inline std::vector<std::unique_ptr<MeshPanel>> make_sandcastle_panel(double S, i
 inline std::vector<Panel<gl::MeshBoundary, gl::MeshDistance, gl::PinholeCamera<float>>> panels_of(
     const std::vector<std::unique_ptr<MeshPanel>>& mp) {
     std::vector<Panel<gl::MeshBoundary, gl::MeshDistance, gl::PinholeCamera<float>>> p;
-    for (const auto& h : mp) p.push_back({h->name, &h->agg, &h->ept, &h->vpt, &h->ctx, &h->camera});
+    for (const auto& h : mp) p.push_back({h->name, &h->agg, &h->ept, &h->vpt, &h->ctx, &h->camera, h->min_ept});
     return p;
 }
 

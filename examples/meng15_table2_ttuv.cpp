@@ -21,7 +21,8 @@
 //
 //   meng15_table2_ttuv [--quality quick|full] [--out DIR] [--seed S] [--threads N] [--scenes a,b]
 //                      [--spp N] [--width W] [--size R] [--castle-size C] [--absorption A] [--preview-stride K]
-//                      [--obj FILE] [--pa P] [--max-events N] [--vpt-depth N] [--checkpoint SECONDS] [--resume]
+//                      [--obj FILE] [--pa P] [--max-events N] [--vpt-depth N] [--min-ept N|auto] [--tau T]
+//                      [--switch-depth D] [--checkpoint SECONDS] [--resume]
 //
 // --checkpoint / --resume: one checkpoint per scene, technique and panel in --out, and the P_a the
 // timed previews chose beside them (a resumed run renders with the killed run's P_a); --pa pins
@@ -153,8 +154,10 @@ SceneResult run_scene(const Example& ex, const std::string& key, const std::vect
             Pa_panel = decided(ex, stem, [&] {
                 std::vector<double> v;
                 for (const auto& p : panels) {
+                    gl::HybridOptions po = opt;
+                    if (p.min_ept > 0) po.min_ept_interactions = p.min_ept;
                     const gl::AcceptanceEstimate a = gl::estimate_optimal_acceptance(
-                        *p.ept, *p.vpt, *p.agg, *p.ctx, *p.camera, rc.spp, rc.seed + 1, rc.threads, opt, rc.preview_stride);
+                        *p.ept, *p.vpt, *p.agg, *p.ctx, *p.camera, rc.spp, rc.seed + 1, rc.threads, po, rc.preview_stride);
                     v.push_back(a.P_a_safe);
                     std::printf("  %-18s %s preview (every %dth pixel): V_L %.3g V_H %.3g t_L %.3g t_H %.3g -> Eq. 8 %.3f; moments "
                                 "%.3f; robust V %.3g E[H^2] %.3g -> %.3f (predicted gain %.2f +- %.2f) -> P_a %.3f\n",
@@ -268,7 +271,10 @@ int main(int argc, char** argv) {
         const std::string obj = ex.opt<std::string>("obj", "", "closed OBJ mesh for the scene 'obj' (scaled to --size grain radii tall)");
         const int max_events = ex.opt<int>("max-events", 4096, "EPT events per path at most (grain-walk events count)");
         const int vpt_depth = ex.opt<int>("vpt-depth", 4096, "VPT scattering + surface events per path at most");
-        const int min_ept = ex.opt<int>("min-ept", 1, "grain interactions in EPT before a path may switch (Meng15 Sec. 6: 1)");
+        const std::string min_ept_arg = ex.opt<std::string>(
+            "min-ept", "1",
+            "grain interactions in EPT before a path may switch (Meng15 Sec. 6: 1), or 'auto': per grain kind, the smallest "
+            "count whose bias in a half-space of the grains is within 3 % (integrators/hybrid_calibration.hpp)");
         const double tau = ex.opt<double>("tau", 4.0, "Eq. 5's bundle-spread threshold tau [grain radii] (Meng15: 4)");
         const double switch_depth = ex.opt<double>(
             "switch-depth", 0.0, "switch to VPT only at least this far inside the boundary [grain radii] (Meng15: 0)");
@@ -281,7 +287,18 @@ int main(int argc, char** argv) {
             throw cli_error("--max-events = " + ex.given_text("max-events") + " must be in [16, 16777216]");
         if (vpt_depth < 16 || vpt_depth > (1 << 24)) throw cli_error("--vpt-depth = " + ex.given_text("vpt-depth") + " must be in [16, 16777216]");
         if (pa_given && !(*pa_given > 0.0 && *pa_given <= 1.0)) throw cli_error("--pa = " + ex.given_text("pa") + " must be in (0, 1]");
-        if (min_ept < 1 || min_ept > 1000) throw cli_error("--min-ept = " + ex.given_text("min-ept") + " must be in [1, 1000]");
+        const bool min_ept_auto = min_ept_arg == "auto";
+        int min_ept = 1;
+        if (!min_ept_auto) {
+            std::size_t used = 0;
+            try {
+                min_ept = std::stoi(min_ept_arg, &used);
+            } catch (const std::exception&) {
+                used = 0;
+            }
+            if (used != min_ept_arg.size() || min_ept < 1 || min_ept > 1000)
+                throw cli_error("--min-ept = " + min_ept_arg + " must be 'auto' or an integer in [1, 1000]");
+        }
         if (!(tau > 0 && tau <= 1e6)) throw cli_error("--tau = " + ex.given_text("tau") + " must be in (0, 1e6]");
         if (!(switch_depth >= 0 && switch_depth <= 1e6))
             throw cli_error("--switch-depth = " + ex.given_text("switch-depth") + " must be in [0, 1e6]");
@@ -331,7 +348,16 @@ int main(int argc, char** argv) {
         Csv csv({"scene", "technique", "P_a", "ttuv", "ttuv_stderr", "ttuv_high", "speedup", "speedup_stderr", "speedup_high",
                  "mean", "bias", "bias_stderr", "switched_fraction", "switch_depth", "da_per_path", "cpu_seconds",
                  "paper_speedup", "paper_speedup_high"});
-        std::string scenes_json;
+        std::string scenes_json, min_ept_json;
+        int snow_k = 0;  // --min-ept auto: the snow grains' calibrated count (computed once)
+        auto snow_min_ept = [&]() {
+            if (!min_ept_auto) return 0;
+            if (snow_k == 0) snow_k = meng15::calibrate_min_ept(g, ex.seed(), ex.threads(), "snow grains");
+            return snow_k;
+        };
+        auto note_min_ept = [&](const std::string& name, int k) {
+            min_ept_json += std::string(min_ept_json.empty() ? "" : ",") + Json::quote(name) + ":" + std::to_string(k > 0 ? k : min_ept);
+        };
         for (const std::string& key : scenes) {
             SceneResult r;
             if (key == "spices") {
@@ -345,6 +371,10 @@ int main(int argc, char** argv) {
                             Rh, std::max(8, width / 2), std::max(6, height / 2));
                 for (const auto& h : heaps) std::printf(" %s %.4f / %.2f R", h->name.c_str(), h->grains.stats.alpha_s(1), h->grains.diffusion.d_DA);
                 std::printf("\n");
+                for (const auto& h : heaps) {
+                    if (min_ept_auto) h->min_ept = meng15::calibrate_min_ept(h->grains, ex.seed(), ex.threads(), h->name);
+                    note_min_ept("spices " + h->name, h->min_ept);
+                }
                 r = run_scene(ex, key, meng15::panels_of(heaps), rc, 0);
             } else if (key == "sandcastle") {
                 const auto sc = meng15::make_sandcastle_panel(0.5 * castle, width, height, ex.seed(), ex.full(), level);
@@ -352,13 +382,19 @@ int main(int argc, char** argv) {
                             "albedo %.4f, d_DA = %.2f R)\n",
                             castle, sc[0]->mesh.triangle_count(), sc[0]->grain_count, sc[0]->grains.stats.alpha_s(1),
                             sc[0]->grains.diffusion.d_DA);
+                if (min_ept_auto) sc[0]->min_ept = meng15::calibrate_min_ept(sc[0]->grains, ex.seed(), ex.threads(), "sand grains");
+                note_min_ept(key, sc[0]->min_ept);
                 r = run_scene(ex, key, meng15::panels_of(sc), rc, 1);
             } else if (key == "glass_bead_cube") {
                 const auto cube = meng15::make_glass_bead_cube(beads, width, height, ex.seed(), ex.full());
                 std::printf("\nscene glass_bead_cube: Moon07 Fig. 9's cube of %.0f glass beads (RSA f = 0.3), side %.1f bead radii "
                             "(albedo %.4f, d_DA = %.2f R)\n",
                             beads, cube->L, cube->grains.stats.alpha_s(1), cube->grains.diffusion.d_DA);
-                r = run_scene(ex, key, cube->panels(), rc, -1);
+                auto pans = cube->panels();
+                if (min_ept_auto)
+                    for (auto& pn : pans) pn.min_ept = meng15::calibrate_min_ept(cube->grains, ex.seed(), ex.threads(), "glass beads");
+                note_min_ept(key, pans.empty() ? 0 : pans[0].min_ept);
+                r = run_scene(ex, key, pans, rc, -1);
             } else if (key == "snow_sphere") {
                 const double Rb = size / 2.5;
                 const gl::SphereBoundary shape(gl::Vec3d(0.0, Rb, 0.0), Rb);
@@ -373,9 +409,10 @@ int main(int argc, char** argv) {
                 const gl::PinholeCamera<float> cam(gl::Vec3f(0.0f, 1.6f * R, 4.2f * R), gl::Vec3f(0.0f, 0.9f * R, 0.0f),
                                                    gl::Vec3f(0, 1, 0), 36.0f, width, height);
                 std::printf("\nscene snow_sphere: sphere of radius %.0f grain radii (Fig. 11's object)\n", Rb);
+                note_min_ept(key, snow_min_ept());
                 r = run_scene(ex, key,
                               std::vector<Panel<gl::SphereBoundary, gl::BoundaryDistance<gl::SphereBoundary>, gl::PinholeCamera<float>>>{
-                                  {key, &agg, &ept, &vpt, &ctx, &cam}},
+                                  {key, &agg, &ept, &vpt, &ctx, &cam, snow_min_ept()}},
                               rc, -1);
             } else {
                 const bool small = key == "snowman_10cm";
@@ -408,9 +445,10 @@ int main(int argc, char** argv) {
                             key.c_str(), key == "obj" ? obj.c_str() : "snowman", Hs,
                             key == "obj" ? "user mesh" : small ? "Fig. 13 bottom: grain radius x10" : "Fig. 13 top",
                             mesh.triangle_count());
+                note_min_ept(key, snow_min_ept());
                 r = run_scene(ex, key,
                               std::vector<Panel<gl::MeshBoundary, gl::MeshDistance, gl::PinholeCamera<float>>>{
-                                  {key, &agg, &ept, &vpt, &ctx, &cam}},
+                                  {key, &agg, &ept, &vpt, &ctx, &cam, snow_min_ept()}},
                               rc, key == "obj" ? -1 : small ? 3 : 2);
             }
             const int prow = key == "snowman_1m" ? 2 : key == "snowman_10cm" ? 3 : key == "spices" ? 0 : key == "sandcastle" ? 1 : -1;
@@ -438,7 +476,8 @@ int main(int argc, char** argv) {
                     ex.out().c_str());
         // Last line: {"scenes": {...}} first (the issue's shape), then the run's metadata.
         Json meta = ex.summary();
-        meta.num("d_DA", g.diffusion.d_DA).integer("spp", spp);
+        meta.num("d_DA", g.diffusion.d_DA).integer("spp", spp).str("min_ept_rule", min_ept_auto ? "auto" : min_ept_arg);
+        meta.raw("min_ept", "{" + min_ept_json + "}");
         meng15::rank_rows(meta, ex, height);
         return ex.finish_line("{\"scenes\":{" + scenes_json + "}," + meta.str().substr(1));
     });

@@ -10,8 +10,10 @@
 
 #include "grainlight/integrators/ept.hpp"
 #include "grainlight/integrators/hybrid.hpp"
+#include "grainlight/integrators/hybrid_calibration.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/media/teleportation.hpp"
+#include "grainlight/packing/md_packer.hpp"
 #include "grainlight/packing/poisson.hpp"
 #include "grainlight/phase/henyey_greenstein.hpp"
 #include "grainlight/phase/tabulated.hpp"
@@ -466,5 +468,78 @@ TEST_CASE("P_a that never loses: robust preview moments and the resolved-gain ru
         REQUIRE(a.P_a_safe == 1.0);
         robust_acceptance(preview(20, 20, 4.0, 1.0, 0.1, 1), 1.0, 0.0, a);
         REQUIRE(a.P_a_safe == 1.0);
+    }
+}
+
+TEST_CASE("Switch calibration: a half-space of sand grains needs more explicit interactions than one",
+          "[hybrid][calibration]") {
+    // Meng15's sand grains (geometry/grains.hpp preset; Table 1 albedo 0.68) in an MD packing at
+    // f = 0.6 (unit bounding radius), as the sandcastle. EPT of the half-space is the reference;
+    // switching after one interaction loses light (examples/meng15_halfspace_switch: -7.9 +- 0.3 %
+    // at normal incidence with 100 000 paths), switching after three loses much less.
+    const auto packed = md_pack(100, 0.6, 3);
+    std::vector<Vec3d> centers = packed.tile.centers();
+    const double s = 1.0 / packed.tile.radius();
+    for (auto& c : centers) c *= s;
+    const PeriodicTile tile(packed.tile.side() * s, 1.0, std::move(centers));
+    const GrainPreset sand = grain_preset("sand");
+    const int level = 2;
+    ScatterometerConfig cfg;
+    cfg.rays = 40000;
+    cfg.seed = 5;
+    const GrainStats stats =
+        run_scatterometer(ScatterometerGrain::procedural(sand.shape, sand.radius, sand.material, sand.seed, level), cfg);
+    const TabMedium medium = make_effective_medium<float, RGB>(stats, tile.packing_fraction(), 1.0);
+    const std::vector<GrainExemplar> ex{GrainExemplar::procedural(sand.shape, sand.radius, sand.material, sand.seed, level)};
+
+    SwitchCalibrationOptions o;
+    o.max_k = 3;
+    o.incidence_deg = {0.0};
+    o.round_paths = 6000;
+    o.max_paths = 6000;
+    o.half_width = 100;
+    o.depth = 100;
+    o.threads = 2;
+    const SwitchCalibration c = calibrate_min_ept_interactions(tile, ex, {1.0}, 7, medium, o);
+    INFO(c.to_string());
+    REQUIRE(c.by_k.size() == 3);
+    CHECK(c.paths == 6000);
+    CHECK(c.reflectance_ept > 0.15);
+    CHECK(c.reflectance_ept < 0.45);
+    // One explicit interaction: a significant deficit (several standard errors).
+    CHECK(c.by_k[0].rel_diff < -0.03);
+    CHECK(c.by_k[0].rel_diff + 3.0 * c.by_k[0].stderr_rel < 0.0);
+    // The deficit shrinks with more explicit interactions, and fewer paths switch.
+    CHECK(std::abs(c.by_k[2].rel_diff) < std::abs(c.by_k[0].rel_diff));
+    CHECK(c.by_k[2].switched_fraction < c.by_k[0].switched_fraction);
+    CHECK(c.min_ept_interactions >= 2);
+
+    SECTION("same numbers on one thread") {
+        SwitchCalibrationOptions o1 = o;
+        o1.threads = 1;
+        o1.round_paths = o1.max_paths = 500;
+        SwitchCalibrationOptions o2 = o1;
+        o2.threads = 2;
+        const SwitchCalibration a = calibrate_min_ept_interactions(tile, ex, {1.0}, 7, medium, o1);
+        const SwitchCalibration b = calibrate_min_ept_interactions(tile, ex, {1.0}, 7, medium, o2);
+        for (std::size_t k = 0; k < 3; ++k) {
+            CHECK(a.by_k[k].rel_diff == b.by_k[k].rel_diff);
+            CHECK(a.by_k[k].stderr_rel == b.by_k[k].stderr_rel);
+        }
+        CHECK(a.reflectance_ept == b.reflectance_ept);
+    }
+    SECTION("bad options name the parameter") {
+        SwitchCalibrationOptions bad = o;
+        bad.max_k = 0;
+        CHECK_THROWS_WITH(calibrate_min_ept_interactions(tile, ex, {1.0}, 7, medium, bad), Catch::Contains("max_k"));
+        bad = o;
+        bad.tolerance = 0.0;
+        CHECK_THROWS_WITH(calibrate_min_ept_interactions(tile, ex, {1.0}, 7, medium, bad), Catch::Contains("tolerance"));
+        bad = o;
+        bad.incidence_deg = {95.0};
+        CHECK_THROWS_WITH(calibrate_min_ept_interactions(tile, ex, {1.0}, 7, medium, bad), Catch::Contains("incidence_deg"));
+        bad = o;
+        bad.max_paths = 10;
+        CHECK_THROWS_WITH(calibrate_min_ept_interactions(tile, ex, {1.0}, 7, medium, bad), Catch::Contains("max_paths"));
     }
 }
