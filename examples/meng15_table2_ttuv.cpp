@@ -272,9 +272,9 @@ int main(int argc, char** argv) {
         const int max_events = ex.opt<int>("max-events", 4096, "EPT events per path at most (grain-walk events count)");
         const int vpt_depth = ex.opt<int>("vpt-depth", 4096, "VPT scattering + surface events per path at most");
         const std::string min_ept_arg = ex.opt<std::string>(
-            "min-ept", "1",
-            "grain interactions in EPT before a path may switch (Meng15 Sec. 6: 1), or 'auto': per grain kind, the smallest "
-            "count whose bias in a half-space of the grains is within 3 % (integrators/hybrid_calibration.hpp)");
+            "min-ept", "auto",
+            "grain interactions in EPT before a path may switch: 'auto' (per grain kind, the smallest count whose bias in a "
+            "half-space of the grains is within 3 %: integrators/hybrid_calibration.hpp) or a count (Meng15 Sec. 6: 1)");
         const double tau = ex.opt<double>("tau", 4.0, "Eq. 5's bundle-spread threshold tau [grain radii] (Meng15: 4)");
         const double switch_depth = ex.opt<double>(
             "switch-depth", 0.0, "switch to VPT only at least this far inside the boundary [grain radii] (Meng15: 0)");

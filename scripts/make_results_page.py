@@ -150,6 +150,13 @@ KEYS = {
         ("sand: TT", "sand_tt_mean", "= Eq. 4", "Meng15 Fig. 6 bottom"),
         ("sand: Eq. 4", "sand_eq4_mean", "", "Meng15 Eq. 4"),
     ],
+    "meng15_halfspace_switch": [
+        ("EPT reflectance, half-space of sand, 0 deg", "reflectance_ept", "", ""),
+        ("VPT after 1 explicit interaction vs EPT", "rel_diff_vpt_k1", "Meng15's rule; sandcastle -6.8 %", "Meng15 Sec. 6"),
+        ("VPT after 3 explicit interactions vs EPT", "rel_diff_vpt_k3", "within 3 %", "issue 12"),
+        ("teleportation transport (Sec. 4.1) after 1, same switch point", "rel_diff_tt_entry_k1", "", "Meng15 Sec. 4.1"),
+        ("TT from the exit point of interaction 1", "rel_diff_tt_exit_k1", "", ""),
+    ],
     "meng15_fig6_ept_free_flight": [
         ("max rel. error of mean free path vs Eq. 4", "max_rel_mean_error", "EPT follows Eq. 4", "Meng15 Fig. 6 bottom"),
     ],

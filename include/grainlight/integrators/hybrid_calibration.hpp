@@ -18,12 +18,12 @@
 /// inside the boundary after k = 1..max_k interactions into the hybrid's own VPT continuation
 /// (hybrid_vpt_continuation, its own random stream). The paired difference gives the relative
 /// bias of switching after k interactions with its standard error, averaged over the incidence
-/// angles of the options (0 and 60 degrees by default). It proceeds in rounds of paths (each
-/// twice the last: long high-albedo paths settle in the first) and stops
-/// once the smallest k whose bias is within `tolerance` (|bias| + 2 standard errors) is known,
-/// i.e. every smaller k is outside it by more than 2 standard errors, or at `max_paths`; then it
-/// returns that k (max_k if none). Deterministic for a seed on any thread count (blocks merged
-/// in order, the stopping rule evaluated on the merged sums).
+/// angles of the options (0 and 60 degrees by default). The choice is the smallest k whose
+/// |bias| <= `tolerance` (max_k if none). It proceeds in rounds of paths (each twice the last:
+/// long high-albedo paths settle in the first) and stops when the choice is resolved (its
+/// |bias| + 2 standard errors within the tolerance, every smaller k's |bias| - 2 standard errors
+/// outside it) or at `max_paths`. Deterministic for a seed on any thread count (blocks merged in
+/// order, the stopping rule evaluated on the merged sums).
 ///
 /// Cost: a few seconds for sand (short paths); grains of albedo ~1 have long paths but a small
 /// paired variance, so the first rounds settle on k = 1.
@@ -71,7 +71,7 @@ struct SwitchBias {
 /// Result of calibrate_min_ept_interactions.
 struct SwitchCalibration {
     int min_ept_interactions = 1;    ///< the chosen k (HybridOptions::min_ept_interactions)
-    bool resolved = false;           ///< the choice is settled at 2 standard errors (else the first k not ruled out)
+    bool resolved = false;           ///< the choice is settled at 2 standard errors (else: the point estimates' choice at max_paths)
     double reflectance_ept = 0;      ///< EPT reflectance, mean over the incidence angles
     std::uint64_t paths = 0;         ///< paths traced per incidence angle
     std::vector<SwitchBias> by_k;    ///< k = 1..max_k
@@ -225,17 +225,20 @@ template <class Medium>
             out.by_k[std::size_t(k)] = SwitchBias{k + 1, rel, std::sqrt(var), sw};
         }
         out.paths = done;
-        // The first k not ruled out (|bias| - 2 se > tolerance rules it out); resolved when it is in.
+        // The first k whose bias is within the tolerance; resolved when it is so by 2 standard
+        // errors and every smaller k is outside it by 2 standard errors.
         int first = K;
-        for (int k = 0; k < K; ++k) {
-            const auto& bk = out.by_k[std::size_t(k)];
-            if (!(std::abs(bk.rel_diff) - 2.0 * bk.stderr_rel > o.tolerance)) {
+        for (int k = 0; k < K; ++k)
+            if (std::abs(out.by_k[std::size_t(k)].rel_diff) <= o.tolerance) {
                 first = k + 1;
                 break;
             }
-        }
         const auto& bf = out.by_k[std::size_t(first - 1)];
         out.resolved = std::abs(bf.rel_diff) + 2.0 * bf.stderr_rel <= o.tolerance;
+        for (int k = 0; k + 1 < first; ++k) {
+            const auto& bk = out.by_k[std::size_t(k)];
+            if (!(std::abs(bk.rel_diff) - 2.0 * bk.stderr_rel > o.tolerance)) out.resolved = false;
+        }
         out.min_ept_interactions = first;
         if (out.resolved || done >= o.max_paths) break;
     }
