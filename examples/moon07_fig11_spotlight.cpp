@@ -8,7 +8,7 @@
 //        [--spheres N] [--fraction F] [--width W] [--spp-pt N] [--spp-low N] [--spp-high N]
 //        [--batches B] [--min-scatter K] [--switch-depth D] [--light-size S] [--light-height H]
 //        [--spot-angle DEG] [--shell-paths N] [--shell-radii N] [--rebuild-table] [--cut-spheres] [--no-nee]
-//        [--face-optics on|off] [--clear-faces]
+//        [--face-optics on|off] [--clear-faces] [--packing rsa|md] [--camera-height H]
 //
 // Scene: the cube of moon07_fig9_cube_shadow (moon07_cube_scene.hpp; same spheres, table and
 // camera), no blocker; the spotlight is a square emitter of side 0.2 L (--light-size) at
@@ -31,6 +31,7 @@
 // Measurement as in moon07_fig9_cube_shadow (batches, measuring.md). JSON (last stdout line):
 // seconds_pt, seconds_low, seconds_high, rmse_pt, rmse_shells, speedup_equal_error, mean_pt,
 // mean_shells, spot_fraction_pt, spot_fraction_shells, bias_rel (+ _se), paper values.
+#include "grainlight/packing/md_packer.hpp"
 #include "moon07_cube_scene.hpp"
 
 int main(int argc, char** argv) {
@@ -39,7 +40,11 @@ int main(int argc, char** argv) {
         "Moon07 Fig. 11: cube of glass spheres under a spotlight, path tracing vs low-order PT + shells",
         "out/moon07_fig11_spotlight", [&](gl_examples::Example& ex) -> int {
         const auto n_spheres = ex.opt<std::size_t>("spheres", 15000, 120000, "number of glass spheres (paper: 120000)");
-        const double fraction = ex.opt<double>("fraction", 0.3, "packing fraction of the RSA spheres, (0, 0.35]");
+        const double fraction = ex.opt<double>("fraction", 0.3, "packing fraction of the spheres, (0, 0.35] (rsa) or (0, 0.64) (md)");
+        const std::string packing = ex.opt<std::string>(
+            "packing", "rsa",
+            "rsa: random sequential addition (Moon07's Poisson spheres, f <= 0.35); md: an MD packing (packing/md_packer.hpp, "
+            "poured beads pack at ~0.6)");
         const int W = ex.opt<int>("width", 128, 512, "image width (height = 3/4 width)");
         const int H = std::max(1, W * 3 / 4);
         const int spp_pt = ex.opt<int>("spp-pt", 96, 256, "path-tracing samples per pixel per batch");
@@ -49,6 +54,8 @@ int main(int argc, char** argv) {
         const double light_height =
             ex.opt<double>("light-height", 0.6, 1.5, "height of the spot emitter above the top face / L, (0, 10]");
         const int B = ex.opt<int>("batches", 8, "independent batches per image (>= 4)");
+        const double cam_height = ex.opt<double>(
+            "camera-height", 1.3, "camera height / L above the floor (1.3: 18 deg above the horizon; the spot fraction depends on it)");
         (void)ex.opt<bool>("cut-spheres", true,
                            "a cube cut out of the periodic packing (flat glass faces; the default)");
         const bool whole_spheres = ex.opt<bool>(
@@ -70,18 +77,32 @@ int main(int argc, char** argv) {
         if (!(light_size > 0 && light_size <= 1))
             throw gl_examples::cli_error("--light-size = " + std::to_string(light_size) + " must be in (0, 1]");
         if (n_spheres < 100) throw gl_examples::cli_error("--spheres = " + std::to_string(n_spheres) + " must be >= 100");
-        if (!(fraction > 0 && fraction <= gl::rsa_max_fraction))
-            throw gl_examples::cli_error("--fraction = " + std::to_string(fraction) + " must be in (0, 0.35]");
+        const bool md = packing == "md";
+        if (!md && packing != "rsa") throw gl_examples::cli_error("--packing = " + packing + " must be rsa or md");
+        if (!md && !(fraction > 0 && fraction <= gl::rsa_max_fraction))
+            throw gl_examples::cli_error("--fraction = " + std::to_string(fraction) + " must be in (0, 0.35] with --packing rsa");
+        if (md && !(fraction > 0 && fraction < gl::md_max_fraction))
+            throw gl_examples::cli_error("--fraction = " + std::to_string(fraction) + " must be in (0, 0.64) with --packing md");
+        if (!(cam_height >= 0.5 && cam_height <= 20))
+            throw gl_examples::cli_error("--camera-height = " + std::to_string(cam_height) + " must be in [0.5, 20]");
         if (W < 8 || W > 8192) throw gl_examples::cli_error("--width = " + std::to_string(W) + " must be in [8, 8192]");
         if (B < 4) throw gl_examples::cli_error("--batches = " + std::to_string(B) + " must be >= 4");
         if (spp_pt < 1) throw gl_examples::cli_error("--spp-pt = " + std::to_string(spp_pt) + " must be >= 1");
         const std::filesystem::path out = ex.out();
         const auto wall0 = std::chrono::steady_clock::now();
 
-        // --- the medium: RSA spheres (radius 1) in a periodic cube of side L ---
+        // --- the medium: RSA (or MD-packed) spheres (radius 1) in a periodic cube of side L ---
         const double L = std::cbrt(double(n_spheres) * 4.0 / 3.0 * gl::pi_v<double> / fraction);
         gl::Rng prng = gl::Rng::from_key(seed, 0xC0BEu);
-        const gl::PeriodicTile rsa = gl::random_sequential_addition(n_spheres, fraction, prng, L);
+        const gl::PeriodicTile rsa = [&] {
+            if (!md) return gl::random_sequential_addition(n_spheres, fraction, prng, L);
+            const gl::MdPackResult r = gl::md_pack(n_spheres, fraction, seed);
+            const double sc = 1.0 / r.tile.radius();  // unit sphere radius; side = L up to the achieved fraction
+            std::vector<Vec3d> c = r.tile.centers();
+            for (auto& v : c) v *= sc;
+            std::cerr << "moon07_fig11: MD packing reached f = " << r.fraction << (r.reached_target ? "" : " (jammed)") << "\n";
+            return gl::PeriodicTile(r.tile.side() * sc, 1.0, std::move(c));
+        }();
         const double R = rsa.radius();
         std::vector<Vec3d> kept;
         for (const Vec3d& c : rsa.centers())
@@ -103,7 +124,7 @@ int main(int argc, char** argv) {
                   << ")\n";
 
         // --- shell table from the same random process (cached; scene_shell_table, moon07_cube_scene.hpp) ---
-        const CachedShellTable ct = scene_shell_table(so, rsa, R, 0.45 * L, full, "moon07_fig9_", n_spheres, fraction, seed,
+        const CachedShellTable ct = scene_shell_table(so, rsa, R, 0.45 * L, full, md ? "moon07_fig11_md_" : "moon07_fig9_", n_spheres, fraction, seed,
                                                       out, ex.root(), "moon07_fig11");  // MPI: rank 0 saves the table
         const gl::ShellTable& table = ct.table;
         const double raw_bytes = ct.raw_bytes, factored_bytes = ct.factored_bytes;
@@ -116,7 +137,7 @@ int main(int argc, char** argv) {
         const gl::ShellTracer<S1, gl::BoxDistance> tracer(table, scene.cube, to);
 
         // --- camera; pixels that see the cube ---
-        const gl::PinholeCamera<double> cam(Vec3d(2.2 * L, -1.6 * L, 1.3 * L), Vec3d(0.5 * L, 0.5 * L, 0.42 * L),
+        const gl::PinholeCamera<double> cam(Vec3d(2.2 * L, -1.6 * L, cam_height * L), Vec3d(0.5 * L, 0.5 * L, 0.42 * L),
                                             Vec3d(0, 0, 1), 36.0, W, H);
         std::size_t n_mask = 0;
         const std::vector<char> mask = volume_pixel_mask(scene, cam, W, H, n_mask, "cube");
@@ -216,6 +237,9 @@ int main(int argc, char** argv) {
             .num("light_size", light_size)
             .num("light_height", light_height)
             .num("spot_angle_deg", spot_angle)
+            .str("packing", packing)
+            .num("camera_height", cam_height)
+            .num("packing_fraction", rsa.packing_fraction())
             .num("emitter_solid_angle_sr", light_size * light_size / (light_height * light_height))
             .boolean("cut_spheres", scene.cut)
             .boolean("exit_rule_table", to.exit_rule == gl::ShellExitRule::table)
