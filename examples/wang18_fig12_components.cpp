@@ -35,6 +35,9 @@ int main(int argc, char** argv) {
             const double R_opt = ex.opt<double>("radius-mfp", 20.0, "sphere radius in green mean free paths");
             const double tol = ex.opt<double>("table-tolerance", 0.0,
                                               "quadtree compression tolerance of the MS table (relative to its peak; 0 lossless)");
+            const double merge = ex.opt<double>("table-merge", 0.0,
+                                                "quadtree merge tolerance of the MS table (relative power-weighted L1 error of "
+                                                "merged blocks; 0: no merging)");
             const int level = ex.opt<int>("mesh-level", 4, "icosphere subdivision level of the bumpy sphere (20 4^level triangles)");
             const double bumps = ex.opt<double>("bumps", 0.06, "relative height of the bumps");
             const std::string obj = ex.opt<std::string>(
@@ -50,6 +53,7 @@ int main(int argc, char** argv) {
             if (!(eps1 > 0 && eps1 <= 10)) throw gl_examples::cli_error("--eps1 must be in (0, 10]");
             if (!(R_opt > 0.5 && R_opt <= 200)) throw gl_examples::cli_error("--radius-mfp must be in (0.5, 200]");
             if (!(tol >= 0 && tol < 0.1)) throw gl_examples::cli_error("--table-tolerance must be in [0, 0.1)");
+            if (!(merge >= 0 && merge < 1)) throw gl_examples::cli_error("--table-merge must be in [0, 1)");
             if (level < 1 || level > 7) throw gl_examples::cli_error("--mesh-level must be in [1, 7]");
             if (!(bumps >= 0 && bumps < 0.3)) throw gl_examples::cli_error("--bumps must be in [0, 0.3)");
             const bool full = ex.full();
@@ -60,7 +64,7 @@ int main(int argc, char** argv) {
             double cpu_table = 0;
             bool cached = false;
             const gl::MsTable<3> table = wang18::cached_table(out, sc, full, seed, cpu_table, cached, ex.root());
-            const gl::MsTableQuadtree<3> qtree(table, tol);
+            const gl::MsTableQuadtree<3> qtree(table, tol, merge);
             // Table 2's table: 1024 x 512 (rho, z) cells x 36 x 18 directions x 3 channels of floats.
             const double paper_dense_bytes = 1024.0 * 512.0 * 36.0 * 18.0 * 3.0 * 4.0;
             gl::PointBasedOptions<float> po = wang18::default_options(sc, full);
@@ -96,11 +100,11 @@ int main(int argc, char** argv) {
                         "%ux%ux%ux%u (%.2f s%s)\n",
                         pb.surface_samples, pb.poisson_radius, pb.volume_samples, po.bounce_samples, table.grid().n_rho,
                         table.grid().n_z, table.grid().n_theta, table.grid().n_phi, cpu_table, cached ? ", cached" : "");
-            std::printf("  MS table read from its quadtree (tolerance %g): %.2f MB dense -> %.2f MB compressed (%zu of %zu cells "
-                        "stored)   [paper Table 2: %.1f GB dense at 1024 x 512 x 36 x 18 (our count: %.2f GB of floats) -> "
+            std::printf("  MS table read from its quadtree (tolerance %g, merge %g): %.2f MB dense -> %.2f MB compressed (%zu of "
+                        "%zu cells read %zu stored lobes, %zu merged blocks)   [paper Table 2: %.1f GB dense at 1024 x 512 x 36 x 18 (our count: %.2f GB of floats) -> "
                         "36-72 MB per material; that grid needs > 4 GB here and is not built]\n",
-                        tol, double(qtree.dense_bytes()) / 1e6, double(qtree.bytes()) / 1e6, qtree.stored_cells(),
-                        table.grid().cells(), 8.4, paper_dense_bytes / 1e9);
+                        tol, merge, double(qtree.dense_bytes()) / 1e6, double(qtree.bytes()) / 1e6, qtree.stored_cells(),
+                        table.grid().cells(), qtree.stored_lobes(), qtree.merged_leaves(), 8.4, paper_dense_bytes / 1e9);
             std::printf("  %-9s %12s %12s %10s %9s %11s\n", "component", "point-based", "VPT", "VPT s.e.", "rel.diff", "e^2");
             gl_examples::Csv csv({"component", "pb_mean", "vpt_mean", "vpt_se", "rel_diff", "rel_se", "mse", "e2"});
             for (int k = 0; k < wang18::kComp; ++k) {
@@ -140,6 +144,7 @@ int main(int argc, char** argv) {
                 .num("memory_mb_table", double(table.bytes()) / 1e6)
                 .num("memory_mb_table_compressed", double(qtree.bytes()) / 1e6)
                 .num("table_tolerance", tol)
+                .num("table_merge_tolerance", merge)
                 .num("paper_table_dense_gb", 8.4)
                 .num("vpt_variance_per_sample", c.ref_var_per_sample)
                 .num("vpt_variance_half_ratio", c.var_half_ratio)

@@ -76,11 +76,85 @@ TEST_CASE("ms_table_quadtree: lossy tolerance drops only cells below it", "[ms_q
     CHECK(q.bytes() <= q0.bytes());
 }
 
+namespace {
+// Power-weighted L1 distance sum_cells vol sum_j dOmega_j |q - v| of channel c between the
+// quadtree and its dense table, and the quadtree's own power (as MsTable::total), computed here
+// from the grid's geometry (not from the quadtree's internals).
+struct PowerError {
+    double l1 = 0, power = 0;
+};
+PowerError power_error(const MsTable<3>& t, const MsTableQuadtree<3>& q, std::size_t c) {
+    const auto& g = t.grid();
+    const double pi = 3.14159265358979323846, dr = g.rho_max / g.n_rho, dz = (g.z_max - g.z_min) / g.n_z;
+    PowerError e;
+    for (std::size_t iz = 0; iz < g.n_z; ++iz)
+        for (std::size_t ir = 0; ir < g.n_rho; ++ir) {
+            const double vol = pi * dz * dr * dr * double(2 * ir + 1);
+            for (std::size_t j = 0; j < g.directions(); ++j) {
+                const double it = double(j / g.n_phi);
+                const double dom = 2 * pi / g.n_phi * (std::cos(pi * it / g.n_theta) - std::cos(pi * (it + 1) / g.n_theta));
+                const double v = q.value(c, iz, ir, j);
+                e.l1 += vol * dom * std::abs(v - double(t.values()[t.value_index(c, iz, ir, j)]));
+                e.power += vol * dom * v;
+            }
+        }
+    return e;
+}
+MsTable<3> dense_noisy_table() {
+    // A high-albedo table with many particles near the source and few far away: the far cells are
+    // noisy and carry little power (what the density-driven merge is for).
+    MsTableOptions t;
+    t.n_rho = 32;
+    t.n_z = 64;
+    t.n_theta = 6;
+    t.n_phi = 3;
+    t.rho_max = 16;
+    t.z_min = -16;
+    t.z_max = 16;
+    t.photons = 20000;
+    t.seed = 5;
+    return MsTable<3>::build(RGBPhase(0.5f), RGB{0.99f, 0.95f, 0.8f}, t);
+}
+}  // namespace
+
+TEST_CASE("ms_table_quadtree: merging keeps the power-weighted L1 error within its tolerance and the power exact",
+          "[ms_quadtree]") {
+    const MsTable<3> t = dense_noisy_table();
+    const MsTableQuadtree<3> q0(t, 0.0);
+    std::size_t last_lobes = q0.stored_lobes();
+    for (double tol : {0.01, 0.05, 0.2}) {
+        const MsTableQuadtree<3> q(t, 0.0, tol);
+        std::printf("ms_quadtree merge %.2f: %zu lobes for %zu cells (%zu merged leaves), %zu B of %zu B dense\n", tol,
+                    q.stored_lobes(), q.stored_cells(), q.merged_leaves(), q.bytes(), q.dense_bytes());
+        for (std::size_t c = 0; c < 3; ++c) {
+            const PowerError e = power_error(t, q, c);
+            const double total = t.total(c);
+            INFO("tolerance " << tol << " channel " << c << ": L1 " << e.l1 << ", total " << total);
+            CHECK(e.l1 <= tol * total * (1 + 1e-6));
+            // The volume-weighted mean lobe keeps every merged block's power in every bin.
+            CHECK(e.power == Approx(total).epsilon(1e-5));
+        }
+        CHECK(q.merged_leaves() > 0);
+        CHECK(q.stored_cells() >= q0.stored_cells());  // merging drops nothing (a merged block also covers its empty cells)
+        CHECK(q.stored_lobes() < q.stored_cells());
+        // A larger tolerance can only merge more (every block mergeable before still is).
+        CHECK(q.stored_lobes() < last_lobes);
+        last_lobes = q.stored_lobes();
+    }
+    // Merging with tolerance 0 is off: lossless.
+    const MsTableQuadtree<3> q00(t, 0.0, 0.0);
+    CHECK(q00.merged_leaves() == 0);
+    CHECK(power_error(t, q00, 1).l1 == 0.0);
+}
+
 TEST_CASE("ms_table_quadtree: bad input", "[ms_quadtree]") {
     const MsTable<3> t = sparse_table();
     CHECK_THROWS_AS(MsTableQuadtree<3>(t, -0.1), std::invalid_argument);
     CHECK_THROWS_AS(MsTableQuadtree<3>(t, std::nan("")), std::invalid_argument);
     CHECK_THROWS_AS(MsTableQuadtree<3>(MsTable<3>{}, 0.0), std::invalid_argument);
+    CHECK_THROWS_AS(MsTableQuadtree<3>(t, 0.0, -0.01), std::invalid_argument);
+    CHECK_THROWS_AS(MsTableQuadtree<3>(t, 0.0, 1.0), std::invalid_argument);
+    CHECK_THROWS_AS(MsTableQuadtree<3>(t, 0.0, std::nan("")), std::invalid_argument);
 }
 
 TEST_CASE("ms_table_quadtree: eval_dir equals the dense table's; the renderer reading it gives the same image",
@@ -127,4 +201,43 @@ TEST_CASE("ms_table_quadtree: eval_dir equals the dense table's; the renderer re
     const MsTable<3> other = MsTable<3>::build(RGBPhase(0.7f), RGB{0.8f, 0.6f, 0.4f}, few);
     const MsTableQuadtree<3> wrong(other, 0.0);
     CHECK_THROWS_AS(pb.use_compressed_table(&wrong), grainlight::invalid_argument);
+}
+
+TEST_CASE("ms_table_quadtree: the renderer reading a merged table stays within its tolerance of the dense one",
+          "[ms_quadtree][point_based]") {
+    const MsTable<3> t = dense_noisy_table();
+    const RGB albedo{0.99f, 0.95f, 0.8f};
+    const ContinuousMedium<RGBPhase, RGB> medium(RGB(12.0f), albedo, RGBPhase(0.5f));  // radius 12 mfp
+    const SphereShape<float> sphere(Vec3f(0.0f), 1.0f);
+    const QuadShape<float> quad(Vec3f(-3.0f, 2.0f, -3.0f), Vec3f(6, 0, 0), Vec3f(0, 0, 6));
+    PointBasedOptions<float> o;
+    o.single = false;
+    o.double_ = false;
+    o.bounced = false;
+    o.volume_step = 0.1f;
+    Rng r1 = Rng::from_key(21);
+    PointBasedRenderer<RGBPhase, SphereShape<float>> pb(medium, 1.33f, sphere, sphere_surface_samples(sphere, 400),
+                                                         Light<float, RGB>::quad_light(quad, RGB(1.0f)), o, r1, &t);
+    auto render = [&](const MsTableQuadtree<3>* q) {
+        pb.use_compressed_table(q);
+        std::array<double, 3> s{};
+        for (int i = 0; i < 16; ++i) {
+            Rng g = Rng::from_key(23, std::uint64_t(i));
+            const Ray<float> ray(Vec3f(0.1f * float(i % 4) - 0.15f, 0.1f * float(i / 4) - 0.15f, 5.0f), Vec3f(0, 0, -1));
+            const RGB m = pb.radiance_components(ray, g).multiple;
+            for (int c = 0; c < 3; ++c) s[std::size_t(c)] += double(m[c]);
+        }
+        return s;
+    };
+    const auto dense = render(nullptr);
+    for (double tol : {0.05, 0.2}) {
+        const MsTableQuadtree<3> q(t, 0.0, tol);
+        const auto merged = render(&q);
+        for (int c = 0; c < 3; ++c) {
+            std::printf("ms_quadtree render: merge %.2f, channel %d: merged / dense multiple term = %.6f (%zu lobes for %zu cells)\n",
+                        tol, c, merged[std::size_t(c)] / dense[std::size_t(c)], q.stored_lobes(), q.stored_cells());
+            CHECK(dense[std::size_t(c)] > 0);
+            CHECK(merged[std::size_t(c)] == Approx(dense[std::size_t(c)]).epsilon(tol));
+        }
+    }
 }

@@ -1,15 +1,27 @@
 /// @file grainlight/integrators/ms_table_quadtree.hpp
 /// Quadtree compression of the multiple-scattering table over its (rho, z) grid (Wang18 Sec. 5.2:
-/// "we discard nodes with no scattering events"). The (z, rho) cell grid, padded to a power of
-/// two, is split into quadrants until a quadrant holds no value above `tolerance` times the
-/// table's largest value (an empty leaf: nothing stored) or is a single cell (a full leaf: its
-/// N x n_theta x n_phi lobe values). tolerance = 0 drops exact zeros only, so every value read
-/// back equals the dense table's; tolerance > 0 also drops cells whose every value is below it.
-/// The paper's density-driven lossy merging of non-empty regions is not done.
+/// "we compress this representation using a quadtree, depending on particle density. We discard
+/// nodes with no scattering events"). The (z, rho) cell grid, padded to a power of two, is split
+/// into quadrants until a quadrant
+///   - holds no value above `tolerance` times the table's largest value: an empty leaf, nothing
+///     stored (tolerance = 0 drops exact zeros only);
+///   - or, with `merge_tolerance` > 0, is smooth enough to be one lobe: a merged leaf storing the
+///     volume-weighted mean lobe of its cells (so the block's power in every direction bin is kept
+///     exactly), taken when for every channel c its error in emitted power,
+///         sum_cells vol sum_j dOmega_j |v - mean_j|,
+///     is at most merge_tolerance * P_c * vol(block) / vol(grid), P_c = MsTable::total(c). The
+///     budget is proportional to volume, so summed over the whole tree the power-weighted L1 error
+///     of the merged table is at most merge_tolerance * P_c. Noisy, sparse cells far from the
+///     source carry little power and merge into large nodes; cells near the source stay fine: the
+///     density-driven subdivision the paper describes, with an error bound;
+///   - or is a single cell: a full leaf with its N x n_theta x n_phi lobe values.
+/// merge_tolerance = 0 (the default) merges nothing, and with tolerance = 0 every value read back
+/// equals the dense table's.
 #pragma once
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -22,13 +34,37 @@ namespace grainlight {
 template <std::size_t N>
 class MsTableQuadtree {
 public:
-    /// Compress `t`; `tolerance` >= 0 relative to the table's largest value (0: lossless).
-    /// Throws invalid_argument for a negative or non-finite tolerance or an empty table.
-    explicit MsTableQuadtree(const MsTable<N>& t, double tolerance = 0.0)
+    /// Compress `t`: cells whose values are all below `tolerance` times the table's largest value
+    /// are dropped, and blocks within `merge_tolerance` (relative power-weighted L1 error, see the
+    /// file comment) are merged into one lobe. Both 0: lossless.
+    /// Throws invalid_argument for a tolerance outside [0, 1) or an empty table.
+    explicit MsTableQuadtree(const MsTable<N>& t, double tolerance = 0.0, double merge_tolerance = 0.0)
         : grid_(t.grid()), albedo_(t.albedos()), g_(t.mean_cosine()), photons_(t.photons()) {
         check_argument(tolerance >= 0.0 && tolerance < 1.0, "MsTableQuadtree", "tolerance", tolerance, "[0, 1)");
+        check_argument(merge_tolerance >= 0.0 && merge_tolerance < 1.0, "MsTableQuadtree", "merge_tolerance",
+                       merge_tolerance, "[0, 1)");
         check_argument(!t.empty(), "MsTableQuadtree", "table size", t.size(), ">= 1");
         nd_ = grid_.directions();
+        merge_tolerance_ = merge_tolerance;
+        if (merge_tolerance > 0.0) {
+            // Cell volumes (by rho ring) and bin solid angles as in MsTable::total.
+            const double dr = grid_.rho_max / grid_.n_rho, dz = (grid_.z_max - grid_.z_min) / grid_.n_z;
+            vol_.resize(grid_.n_rho);
+            for (std::size_t ir = 0; ir < grid_.n_rho; ++ir) {
+                const double r0 = double(ir) * dr, r1 = r0 + dr;
+                vol_[ir] = pi_v<double> * (r1 * r1 - r0 * r0) * dz;
+            }
+            dom_.resize(nd_);
+            for (std::size_t j = 0; j < nd_; ++j) {
+                const std::size_t it = j / grid_.n_phi;
+                const double th0 = pi_v<double> * double(it) / grid_.n_theta, th1 = pi_v<double> * double(it + 1) / grid_.n_theta;
+                dom_[j] = 2.0 * pi_v<double> / grid_.n_phi * (std::cos(th0) - std::cos(th1));
+            }
+            double vgrid = 0;
+            for (double v : vol_) vgrid += v * grid_.n_z;
+            for (std::size_t c = 0; c < N; ++c) budget_per_volume_[c] = merge_tolerance * t.total(c) / vgrid;
+            mean_.resize(N * nd_);
+        }
         float vmax = 0.0f;
         for (float v : t.values()) vmax = std::max(vmax, v);
         threshold_ = float(tolerance * double(vmax));
@@ -43,7 +79,8 @@ public:
                     for (std::size_t j = 0; j < nd_ && !any; ++j) any = t.values()[t.value_index(c, iz, ir, j)] > threshold_;
                 full[iz * grid_.n_rho + ir] = any ? 1 : 0;
             }
-        build(t, full, 0, 0, side_);
+        nodes_.push_back(Node{});
+        nodes_[0] = build(t, full, 0, 0, side_);
     }
 
     /// The stored value of channel c, cell (iz, ir), direction bin j; 0 in a dropped region.
@@ -108,8 +145,14 @@ public:
     [[nodiscard]] std::size_t dense_bytes() const noexcept { return N * grid_.cells() * nd_ * sizeof(float); }
     /// Bytes held: nodes plus the stored lobes.
     [[nodiscard]] std::size_t bytes() const noexcept { return nodes_.size() * sizeof(Node) + data_.size() * sizeof(float); }
-    /// Number of cells whose lobes are stored.
-    [[nodiscard]] std::size_t stored_cells() const noexcept { return data_.size() / (N * nd_); }
+    /// Number of grid cells that read a stored lobe (in a full or a merged leaf).
+    [[nodiscard]] std::size_t stored_cells() const noexcept { return covered_cells_; }
+    /// Number of lobes stored (one per full leaf and one per merged leaf).
+    [[nodiscard]] std::size_t stored_lobes() const noexcept { return data_.size() / (N * nd_); }
+    /// Number of merged leaves (blocks of more than one cell stored as one lobe).
+    [[nodiscard]] std::size_t merged_leaves() const noexcept { return merged_leaves_; }
+    /// The merge tolerance the tree was built with.
+    [[nodiscard]] double merge_tolerance() const noexcept { return merge_tolerance_; }
     /// Absolute threshold below which a whole cell was dropped.
     [[nodiscard]] float threshold() const noexcept { return threshold_; }
     /// The grid of the source table.
@@ -121,35 +164,68 @@ private:
         std::uint32_t child = kEmpty;  ///< first of 4 children, or kEmpty / kLeaf
         std::uint32_t data = 0;        ///< offset of a leaf's lobe values
     };
-    // Returns the node index; children of a node are stored contiguously.
-    std::uint32_t build(const MsTable<N>& t, const std::vector<std::uint8_t>& full, std::uint32_t z0,
-                        std::uint32_t r0, std::uint32_t s) {
-        const std::uint32_t id = std::uint32_t(nodes_.size());
-        nodes_.push_back(Node{});
+    // Can the in-grid cells of block (z0, r0, s) be one lobe (see the file comment)? On success
+    // mean_ holds the volume-weighted mean lobe.
+    bool mergeable(const MsTable<N>& t, std::uint32_t z0, std::uint32_t r0, std::uint32_t s) {
+        const std::uint32_t z1 = std::min<std::uint32_t>(z0 + s, grid_.n_z), r1 = std::min<std::uint32_t>(r0 + s, grid_.n_rho);
+        std::fill(mean_.begin(), mean_.end(), 0.0);
+        double vb = 0;
+        for (std::uint32_t iz = z0; iz < z1; ++iz)
+            for (std::uint32_t ir = r0; ir < r1; ++ir) {
+                vb += vol_[ir];
+                for (std::size_t c = 0; c < N; ++c) {
+                    const float* v = t.values().data() + t.value_index(c, iz, ir, 0);
+                    double* m = mean_.data() + c * nd_;
+                    for (std::size_t j = 0; j < nd_; ++j) m[j] += vol_[ir] * double(v[j]);
+                }
+            }
+        for (double& m : mean_) m /= vb;
+        for (std::size_t c = 0; c < N; ++c) {
+            const double budget = budget_per_volume_[c] * vb;
+            const double* m = mean_.data() + c * nd_;
+            double err = 0;
+            for (std::uint32_t iz = z0; iz < z1; ++iz)
+                for (std::uint32_t ir = r0; ir < r1; ++ir) {
+                    const float* v = t.values().data() + t.value_index(c, iz, ir, 0);
+                    double e = 0;
+                    for (std::size_t j = 0; j < nd_; ++j) e += dom_[j] * std::abs(double(v[j]) - m[j]);
+                    err += vol_[ir] * e;
+                    if (err > budget) return false;
+                }
+        }
+        return true;
+    }
+    // The node of block (z0, r0, s); its subtree (children stored contiguously) and lobes are
+    // appended to nodes_ and data_.
+    Node build(const MsTable<N>& t, const std::vector<std::uint8_t>& full, std::uint32_t z0, std::uint32_t r0,
+               std::uint32_t s) {
+        if (z0 >= grid_.n_z || r0 >= grid_.n_rho) return Node{};
+        const std::uint32_t z1 = std::min<std::uint32_t>(z0 + s, grid_.n_z), r1 = std::min<std::uint32_t>(r0 + s, grid_.n_rho);
         bool any = false;
-        for (std::uint32_t iz = z0; iz < std::min<std::uint32_t>(z0 + s, grid_.n_z) && !any; ++iz)
-            for (std::uint32_t ir = r0; ir < std::min<std::uint32_t>(r0 + s, grid_.n_rho) && !any; ++ir)
-                any = full[std::size_t(iz) * grid_.n_rho + ir] != 0;
-        if (!any) return id;
+        for (std::uint32_t iz = z0; iz < z1 && !any; ++iz)
+            for (std::uint32_t ir = r0; ir < r1 && !any; ++ir) any = full[std::size_t(iz) * grid_.n_rho + ir] != 0;
+        if (!any) return Node{};
         if (s == 1) {
-            nodes_[id].child = kLeaf;
-            nodes_[id].data = std::uint32_t(data_.size());
+            const Node leaf{kLeaf, std::uint32_t(data_.size())};
             for (std::size_t c = 0; c < N; ++c)
                 for (std::size_t j = 0; j < nd_; ++j) data_.push_back(t.values()[t.value_index(c, z0, r0, j)]);
-            return id;
+            ++covered_cells_;
+            return leaf;
         }
-        const std::uint32_t first = std::uint32_t(nodes_.size());
+        if (merge_tolerance_ > 0.0 && mergeable(t, z0, r0, s)) {
+            const Node leaf{kLeaf, std::uint32_t(data_.size())};
+            for (double m : mean_) data_.push_back(float(m));
+            covered_cells_ += std::size_t(z1 - z0) * (r1 - r0);
+            ++merged_leaves_;
+            return leaf;
+        }
+        const std::uint32_t first = std::uint32_t(nodes_.size()), h = s / 2;
         nodes_.resize(nodes_.size() + 4);
-        nodes_[id].child = first;
-        const std::uint32_t h = s / 2;
         for (std::uint32_t q = 0; q < 4; ++q) {
-            // Build each child in place at first + q: build() appends, so build into a temporary
-            // subtree and move its root node into the reserved slot.
-            const std::uint32_t sub = build(t, full, z0 + (q / 2) * h, r0 + (q % 2) * h, h);
-            nodes_[first + q] = nodes_[sub];
-            if (sub == std::uint32_t(nodes_.size()) - 1 && nodes_[sub].child >= kLeaf) nodes_.pop_back();
+            const Node child = build(t, full, z0 + (q / 2) * h, r0 + (q % 2) * h, h);
+            nodes_[first + q] = child;
         }
-        return id;
+        return Node{first, 0};
     }
 
     MsTableGrid grid_;
@@ -159,6 +235,10 @@ private:
     std::size_t nd_ = 1;
     float threshold_ = 0.0f;
     std::uint32_t side_ = 1;
+    double merge_tolerance_ = 0;
+    std::array<double, N> budget_per_volume_{};
+    std::vector<double> vol_, dom_, mean_;  // cell volume by rho ring, bin solid angle, scratch lobe
+    std::size_t covered_cells_ = 0, merged_leaves_ = 0;
     std::vector<Node> nodes_;
     std::vector<float> data_;
 };
