@@ -24,6 +24,7 @@
 // rel_diff_no_diffraction (ours -FD / EPT - 1) with its standard error, the membership rule's
 // predicted extinction factor, and bytes per particle. Timings are reported, never asserted.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -36,6 +37,7 @@
 #include "grainlight/packing/particle_cloud.hpp"
 #include "grainlight/traversal/particle_grid.hpp"
 #include "guo21_cornell_scene.hpp"
+#include "guo21_sphere_bvh.hpp"
 
 namespace gl = grainlight;
 using S = gl::Spectrum<1, float>;
@@ -55,6 +57,9 @@ int main(int argc, char** argv) {
             const double forced = ex.opt<double>("forced-collision", 0.5,
                                                  "ours: forced-collision floor q_min in [0, 1) (0 = analog free flights, "
                                                  "which stop at the collision)");
+            const bool ept_bvh = ex.opt<bool>("ept-bvh", true,
+                                              "also render EPT with the spheres in a BVH (the paper's EPT structure; "
+                                              "guo21_sphere_bvh.hpp) beside EPT through the particle grid");
             ex.checkpointable();
             ex.ready();
             guo21_mpi::quiet_other_ranks(ex);
@@ -84,6 +89,7 @@ int main(int argc, char** argv) {
                         guo21_cornell::kRadiusUm, width, width, spp, 1 / rc_over_rp, factor, ex.threads());
             std::printf("  %9s %8s %8s %8s %10s %10s %11s %11s %12s %9s %7s\n", "N", "EPT s", "ours s", "-FD s", "EPT/ours",
                         "EPT/-FD", "ttuv E/ours", "ttuv E/-FD", "-FD vs EPT", "+- 1 se", "B/part");
+            std::vector<double> v_bvh_build, v_tb, v_ratio_b, v_ratio_b_fd, v_tt_b, v_tt_b_fd, v_mb, v_rd_b;
             std::vector<double> v_n, v_te, v_to, v_tf, v_ratio, v_ratio_fd, v_tt, v_tt_fd, v_me, v_mo, v_mf, v_rd, v_rd_se, v_rdo, v_bpp;
             gl_examples::Csv csv({"N", "cpu_seconds_ept", "cpu_seconds_discrete", "cpu_seconds_discrete_no_diffraction",
                                   "time_ratio", "time_ratio_no_diffraction", "ttuv_speedup", "ttuv_speedup_no_diffraction",
@@ -105,6 +111,16 @@ int main(int argc, char** argv) {
                     gl::Scene<M> sc;
                     guo21_cornell::build_cornell(sc, sc.add_medium(M(grid, 1.31f)), 1.5 * r_p);
                     ept = guo21_cornell::render_scene_batches(ex, batches, opt, mask, "EPT " + tag, width, sc, camera);
+                }
+                guo21_cornell::Run eptb;
+                if (ept_bvh) {
+                    using M = gl::ExplicitSphereMedium<float, guo21_bvh::SphereBvhLookup>;
+                    const auto c0 = std::chrono::steady_clock::now();
+                    guo21_bvh::SphereBvhLookup lookup(cloud);
+                    v_bvh_build.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count());
+                    gl::Scene<M> sc;
+                    guo21_cornell::build_cornell(sc, sc.add_medium(M(std::move(lookup), 1.31f)), 1.5 * r_p);
+                    eptb = guo21_cornell::render_scene_batches(ex, batches, opt, mask, "EPT-BVH " + tag, width, sc, camera);
                 }
                 double bytes_pp = 0;
                 auto ours = [&](bool diffraction, const std::string& label) {
@@ -142,9 +158,24 @@ int main(int argc, char** argv) {
                 v_rd_se.push_back(se);
                 v_rdo.push_back(mo / me - 1);
                 v_bpp.push_back(bytes_pp);
+                if (ept_bvh) {
+                    const double mb = guo21_cornell::masked_mean(eptb.img, mask), tt_b = eptb.ttuv(npix);
+                    v_tb.push_back(eptb.cpu_seconds);
+                    v_ratio_b.push_back(eptb.cpu_seconds / o.cpu_seconds);
+                    v_ratio_b_fd.push_back(eptb.cpu_seconds / f.cpu_seconds);
+                    v_tt_b.push_back(tt_b / tt_o);
+                    v_tt_b_fd.push_back(tt_b / tt_f);
+                    v_mb.push_back(mb);
+                    v_rd_b.push_back(mb / me - 1);
+                }
                 std::printf("  %9.3g %8.2f %8.2f %8.2f %9.2fx %9.2fx %10.2fx %10.2fx %+12.4f %9.4f %7.1f\n", double(N), ept.cpu_seconds,
                             o.cpu_seconds, f.cpu_seconds, v_ratio.back(), v_ratio_fd.back(), v_tt.back(), v_tt_fd.back(), mf / me - 1,
                             se, bytes_pp);
+                if (ept_bvh)
+                    std::printf("  %9s EPT with the spheres in a BVH: %.2f s (build %.2f s wall), EPT-BVH / ours %.2fx, / -FD %.2fx at equal spp; "
+                                "ttuv %.2fx / %.2fx; mean vs EPT through the grid %+.2e\n",
+                                "", eptb.cpu_seconds, v_bvh_build.back(), v_ratio_b.back(), v_ratio_b_fd.back(), v_tt_b.back(),
+                                v_tt_b_fd.back(), v_rd_b.back());
                 csv.row({double(N), ept.cpu_seconds, o.cpu_seconds, f.cpu_seconds, v_ratio.back(), v_ratio_fd.back(), v_tt.back(),
                          v_tt_fd.back(), me, mo, mf, mf / me - 1, se, bytes_pp});
             }
@@ -157,6 +188,11 @@ int main(int argc, char** argv) {
                         "%.2fx .. %.2fx, per unit variance %.2fx .. %.2fx (with diffraction)\n",
                         *std::min_element(v_ratio.begin(), v_ratio.end()), *std::max_element(v_ratio.begin(), v_ratio.end()),
                         *std::min_element(v_tt.begin(), v_tt.end()), *std::max_element(v_tt.begin(), v_tt.end()));
+            if (ept_bvh)
+                std::printf("  against EPT with a BVH (the paper's EPT structure): ours at equal spp %.2fx .. %.2fx, per unit variance "
+                            "%.2fx .. %.2fx (with diffraction)\n",
+                            *std::min_element(v_ratio_b.begin(), v_ratio_b.end()), *std::max_element(v_ratio_b.begin(), v_ratio_b.end()),
+                            *std::min_element(v_tt_b.begin(), v_tt_b.end()), *std::max_element(v_tt_b.begin(), v_tt_b.end()));
             double max_abs_rd = 0, max_abs_rd_small = 0;
             for (std::size_t i = 0; i < v_rd.size(); ++i) {
                 max_abs_rd = std::max(max_abs_rd, std::abs(v_rd[i]));
@@ -190,6 +226,20 @@ int main(int argc, char** argv) {
                 .num("max_abs_rel_diff_no_diffraction_n_le_1e5", max_abs_rd_small)
                 .num("max_z_no_diffraction", max_z)
                 .num("bytes_per_particle_max", *std::max_element(v_bpp.begin(), v_bpp.end()))
+                .boolean("ept_bvh", ept_bvh);
+            if (ept_bvh) {
+                double max_rd_b = 0;
+                for (double x : v_rd_b) max_rd_b = std::max(max_rd_b, std::abs(x));
+                j.nums("cpu_seconds_ept_bvh", v_tb)
+                    .nums("cpu_seconds_bvh_build", v_bvh_build)
+                    .nums("time_ratio_bvh", v_ratio_b)
+                    .nums("time_ratio_bvh_no_diffraction", v_ratio_b_fd)
+                    .nums("ttuv_speedup_bvh", v_tt_b)
+                    .nums("ttuv_speedup_bvh_no_diffraction", v_tt_b_fd)
+                    .nums("mean_ept_bvh", v_mb)
+                    .num("max_abs_rel_diff_ept_bvh_vs_grid", max_rd_b);
+            }
+            j
                 .num("paper_time_ratio_1e5", 1.2)
                 .num("paper_time_ratio_1e6", 2.0)
                 .str("csv", csv_path.string())

@@ -167,11 +167,13 @@ endif()
 if(TARGET guo21_fig20_time_vs_n)
   # Guo21 Fig. 20 / Sec. 6.8: times are reported, never asserted. Checked: at every N <= 1e5 ours -FD
   # (ray optics) has EPT's mean radiance within 10 % (two renders of the same physics; measured
-  # <= 2.1 %, standard errors 2-4 % at quick), and the cloud + grid stay below 64 bytes per particle.
+  # <= 2.1 %, standard errors 2-4 % at quick), the cloud + grid stay below 64 bytes per particle, and
+  # EPT through the example's sphere BVH gives EPT-through-the-grid's image (the same spheres and
+  # random streams: two lookups that must agree).
   set(_g20out ${CMAKE_CURRENT_BINARY_DIR}/guo21_fig20_out)
   grainlight_example_json_test(LABELS "example;discrete" NAME guo21_fig20_time_vs_n_json TARGET guo21_fig20_time_vs_n
     ARGS "--quality;quick;--threads;2;--out;${_g20out}"
-    CHECKS "max_abs_rel_diff_no_diffraction_n_le_1e5 <= 0.10;bytes_per_particle_max < 64;rc_over_rp <= 0.1"
+    CHECKS "max_abs_rel_diff_no_diffraction_n_le_1e5 <= 0.10;bytes_per_particle_max < 64;rc_over_rp <= 0.1;max_abs_rel_diff_ept_bvh_vs_grid <= 1e-5"
     EXPECT_FILE ${_g20out}/guo21_fig20_time_vs_n.csv
     BAD_NAME guo21_fig20_time_vs_n_bad_counts BAD_REGEX "counts" BAD_ARGS --counts 0 --out ${_g20out})
 endif()

@@ -683,29 +683,24 @@ private:
     Phase phase_;
 };
 
-/// The cloud as explicit smooth dielectric spheres of relative index eta (Guo21's EPT).
-template <std::floating_point F = float>
-class ExplicitSphereMedium {
+/// Sphere lookups of ExplicitSphereMedium through a ParticleGrid (the default lookup). A lookup
+/// type provides `particles()` (the spheres, indexed as the cloud), `containing(p)` (a sphere
+/// whose interior holds p, or -1) and `first_hit(o, d, t_max, t_hit)` (the first sphere entered
+/// along o + t d for t in (1e-5 r, t_max], or -1; t_hit its entry distance), all const, noexcept
+/// and allocation-free, so another structure over the same spheres (a BVH, an Embree scene) can be
+/// ExplicitSphereMedium's second template argument.
+class GridSphereLookup {
 public:
-    /// Floating-point type (Medium concept).
-    using Float = F;
-    /// Spectrum type: one grey channel of F (Medium concept).
-    using Spectrum = grainlight::Spectrum<1, F>;
-    /// Short name of Spectrum.
-    using S = Spectrum;
-
-    /// Spheres of `grid`'s cloud (not null) with relative refractive index eta (> 0, != 1, finite);
-    /// throws grainlight::invalid_argument otherwise. Immutable: const members are thread-safe.
-    ExplicitSphereMedium(std::shared_ptr<const ParticleGrid> grid, F eta) : grid_(std::move(grid)), eta_(eta) {
+    /// Lookups in `grid` (not null); throws grainlight::invalid_argument otherwise.
+    explicit GridSphereLookup(std::shared_ptr<const ParticleGrid> grid) : grid_(std::move(grid)) {
         check_argument(bool(grid_), "ExplicitSphereMedium", "grid", "null", "a particle grid");
-        check_argument(std::isfinite(eta) && eta > F(0) && eta != F(1), "ExplicitSphereMedium", "eta", eta,
-                       "> 0, != 1 (finite)");
     }
     /// The particle grid (shared, not copied).
     [[nodiscard]] const ParticleGrid& grid() const noexcept { return *grid_; }
-
+    /// The spheres.
+    [[nodiscard]] const CloudParticle* particles() const noexcept { return grid_->cloud().particles().data(); }
     /// Sphere containing p, or -1.
-    [[nodiscard]] std::int64_t sphere_containing(const Vec3<float>& p) const noexcept {
+    [[nodiscard]] std::int64_t containing(const Vec3<float>& p) const noexcept {
         std::int64_t found = -1;
         grid_->for_each_in_sphere(p, 0.0f, [&](std::uint32_t i, float) {
             found = i;
@@ -713,9 +708,9 @@ public:
         });
         return found;
     }
-    /// First sphere hit along o + t d, t in (eps, t_max]: index (or -1) and t.
+    /// First sphere entered along o + t d, t in (1e-5 r, t_max]: index (or -1) and t_hit.
     [[nodiscard]] std::int64_t first_hit(const Vec3<float>& o, const Vec3<float>& d, float t_max, float& t_hit) const noexcept {
-        const CloudParticle* ps = grid_->cloud().particles().data();
+        const CloudParticle* ps = particles();
         std::int64_t best = -1;
         float best_t = t_max;
         grid_->walk_voxels(o, d, 0.0f, t_max, [&](std::span<const std::uint32_t> refs, float, float tx) {
@@ -730,6 +725,48 @@ public:
         });
         t_hit = best_t;
         return best;
+    }
+
+private:
+    std::shared_ptr<const ParticleGrid> grid_;
+};
+
+/// The cloud as explicit smooth dielectric spheres of relative index eta (Guo21's EPT), found
+/// through `Lookup` (GridSphereLookup by default; see there for what another lookup provides).
+template <std::floating_point F = float, class Lookup = GridSphereLookup>
+class ExplicitSphereMedium {
+public:
+    /// Floating-point type (Medium concept).
+    using Float = F;
+    /// Spectrum type: one grey channel of F (Medium concept).
+    using Spectrum = grainlight::Spectrum<1, F>;
+    /// Short name of Spectrum.
+    using S = Spectrum;
+
+    /// Spheres of `grid`'s cloud (not null) with relative refractive index eta (> 0, != 1, finite);
+    /// throws grainlight::invalid_argument otherwise. Immutable: const members are thread-safe.
+    ExplicitSphereMedium(std::shared_ptr<const ParticleGrid> grid, F eta)
+        requires std::same_as<Lookup, GridSphereLookup>
+        : ExplicitSphereMedium(GridSphereLookup(std::move(grid)), eta) {}
+    /// Spheres found through `lookup`, relative refractive index eta (> 0, != 1, finite).
+    ExplicitSphereMedium(Lookup lookup, F eta) : lookup_(std::move(lookup)), eta_(eta) {
+        check_argument(std::isfinite(eta) && eta > F(0) && eta != F(1), "ExplicitSphereMedium", "eta", eta,
+                       "> 0, != 1 (finite)");
+    }
+    /// The particle grid (shared, not copied).
+    [[nodiscard]] const ParticleGrid& grid() const noexcept
+        requires std::same_as<Lookup, GridSphereLookup>
+    {
+        return lookup_.grid();
+    }
+    /// The sphere lookup.
+    [[nodiscard]] const Lookup& lookup() const noexcept { return lookup_; }
+
+    /// Sphere containing p, or -1.
+    [[nodiscard]] std::int64_t sphere_containing(const Vec3<float>& p) const noexcept { return lookup_.containing(p); }
+    /// First sphere hit along o + t d, t in (eps, t_max]: index (or -1) and t.
+    [[nodiscard]] std::int64_t first_hit(const Vec3<float>& o, const Vec3<float>& d, float t_max, float& t_hit) const noexcept {
+        return lookup_.first_hit(o, d, t_max, t_hit);
     }
 
     /// Transmittance along `ray` over [0, t]: 0 if the origin is inside a sphere or a sphere surface
@@ -754,7 +791,7 @@ public:
     [[nodiscard]] Interaction<F, S> sample_interaction(const Ray<F>& ray, F t_max, Rng& rng) const noexcept {
         Interaction<F, S> it;
         const Vec3<float> o(ray.o), d(ray.d);
-        const CloudParticle* ps = grid_->cloud().particles().data();
+        const CloudParticle* ps = lookup_.particles();
         std::int64_t idx = sphere_containing(o);
         const bool from_inside = idx >= 0;
         float t = 0;
@@ -844,7 +881,7 @@ private:
         return glm::normalize(d - F(2) * glm::dot(d, n) * n);
     }
 
-    std::shared_ptr<const ParticleGrid> grid_;
+    Lookup lookup_;
     F eta_;
 };
 
