@@ -9,6 +9,14 @@
 //   taskset -c 1 bench_embree --benchmark_filter='/[56]$'   1e5 and 1e6 grains
 //   taskset -c 1 bench_embree --benchmark_filter='/7$'      1e7 grains (Embree ~3.6 GB, 10-20 s build)
 //
+// Second part (the discrete-media issue's Fig. 20 baseline): the first sphere entered by a ray in
+// Guo21 Fig. 20's cloud (hard 1000 um spheres in the Cornell box's 0.7 m cube, N = 1e5 / 1e6), through
+// the library's particle grid (GridSphereLookup, what ExplicitSphereMedium uses), the scalar
+// binary BVH of examples/guo21_sphere_bvh.hpp (guo21_fig20_time_vs_n's EPT-BVH baseline), and
+// Embree's RTC_GEOMETRY_TYPE_SPHERE_POINT (a production BVH over spheres); rays start at uniform
+// points of the cube outside every sphere, in uniform directions (EPT's path segments).
+//   taskset -c 1 bench_embree --benchmark_filter='Spheres'
+//
 // Counters: memory_MB (Algorithm 1: its own count of tile + voxels + exemplar BVH bytes; Embree:
 // the growth of the process's resident size while the instances are built and committed),
 // build_s, grains, hit_rate; BM_EmbreeCheckSameHits: mismatches among 8192 rays (first grain or
@@ -22,6 +30,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -34,6 +43,11 @@
 #include "grainlight/traversal/aggregate.hpp"
 
 #include "common/aggregate_rays.hpp"
+#include "grainlight/geometry/voxelized_boundary.hpp"
+#include "grainlight/media/discrete_particles.hpp"
+#include "grainlight/packing/particle_cloud.hpp"
+#include "grainlight/traversal/particle_grid.hpp"
+#include "guo21_sphere_bvh.hpp"
 
 using namespace grainlight;
 
@@ -225,8 +239,114 @@ void BM_EmbreeCheckSameHits(benchmark::State& st) {
     st.counters["mismatches"] = double(mismatches);
 }
 
+
+// ---- Guo21 Fig. 20's sphere cloud: grid vs scalar BVH vs Embree spheres ----
+
+struct SphereCloud {
+    std::shared_ptr<const ParticleCloud> cloud;
+    std::unique_ptr<GridSphereLookup> grid;
+    std::unique_ptr<guo21_bvh::SphereBvhLookup> bvh;
+    RTCDevice device = nullptr;
+    RTCScene scene = nullptr;
+    std::vector<Vec3<float>> o, d;
+    ~SphereCloud() {
+        if (scene) rtcReleaseScene(scene);
+        if (device) rtcReleaseDevice(device);
+    }
+    std::int64_t embree_hit(const Vec3<float>& org, const Vec3<float>& dir, float& t) const {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        RTCRayHit rh{};
+        rh.ray.org_x = org.x, rh.ray.org_y = org.y, rh.ray.org_z = org.z;
+        rh.ray.dir_x = dir.x, rh.ray.dir_y = dir.y, rh.ray.dir_z = dir.z;
+        rh.ray.tnear = 1e-8f;  // 1e-5 r, as the lookups' entry test
+        rh.ray.tfar = std::numeric_limits<float>::infinity();
+        rh.ray.mask = 0xffffffffu;
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(scene, &ctx, &rh);
+        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return -1;
+        t = rh.ray.tfar;
+        return std::int64_t(rh.hit.primID);
+    }
+};
+
+const SphereCloud& sphere_cloud(int lg) {
+    static std::map<int, std::unique_ptr<SphereCloud>> cache;
+    auto& c = cache[lg];
+    if (c) return *c;
+    c = std::make_unique<SphereCloud>();
+    const BoxBoundary box(Vec3d(0.15, 0.05, 0.15), Vec3d(0.85, 0.75, 0.85));
+    const std::vector<CloudSpecies> species{cloud_species(MonodispersePsd(1000.0))};
+    c->cloud = std::make_shared<ParticleCloud>(
+        ParticleCloud::generate_non_overlapping(box, std::uint64_t(std::pow(10.0, lg)), species, 20 + lg, 1e6));
+    c->grid = std::make_unique<GridSphereLookup>(std::make_shared<ParticleGrid>(*c->cloud, ParticleGridSettings{}));
+    c->bvh = std::make_unique<guo21_bvh::SphereBvhLookup>(c->cloud);
+    c->device = rtcNewDevice("threads=1");
+    c->scene = rtcNewScene(c->device);
+    RTCGeometry g = rtcNewGeometry(c->device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+    const auto& ps = c->cloud->particles();
+    auto* v = static_cast<float*>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), ps.size()));
+    for (std::size_t i = 0; i < ps.size(); ++i) {
+        v[4 * i] = ps[i].x, v[4 * i + 1] = ps[i].y, v[4 * i + 2] = ps[i].z, v[4 * i + 3] = ps[i].r;
+    }
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(c->scene, g);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(c->scene);
+    Rng rng = Rng::from_key(99, std::uint64_t(lg));
+    while (c->o.size() < 4096) {
+        const Vec3<float> p(0.15f + 0.7f * rng.uniform<float>(), 0.05f + 0.7f * rng.uniform<float>(), 0.15f + 0.7f * rng.uniform<float>());
+        if (c->grid->containing(p) >= 0) continue;
+        c->o.push_back(p);
+        c->d.push_back(sample_uniform_sphere(Vec2<float>(rng.uniform<float>(), rng.uniform<float>())));
+    }
+    return *c;
+}
+
+template <int Kind>  // 0: grid, 1: scalar BVH, 2: Embree
+void BM_Spheres(benchmark::State& st) {
+    const SphereCloud& c = sphere_cloud(int(st.range(0)));
+    std::size_t i = 0, hits = 0;
+    for (auto _ : st) {
+        float t = 0;
+        const std::int64_t h = Kind == 0   ? c.grid->first_hit(c.o[i], c.d[i], std::numeric_limits<float>::infinity(), t)
+                               : Kind == 1 ? c.bvh->first_hit(c.o[i], c.d[i], std::numeric_limits<float>::infinity(), t)
+                                           : c.embree_hit(c.o[i], c.d[i], t);
+        hits += h >= 0;
+        benchmark::DoNotOptimize(t);
+        i = (i + 1) % c.o.size();
+    }
+    st.SetItemsProcessed(std::int64_t(st.iterations()));
+    st.counters["spheres"] = double(c.cloud->particles().size());
+    st.counters["hit_rate"] = double(hits) / double(st.iterations());
+}
+
+/// Not timed: the three return the same first sphere at the same distance for 4096 rays.
+void BM_SpheresCheckSameHits(benchmark::State& st) {
+    const SphereCloud& c = sphere_cloud(int(st.range(0)));
+    std::int64_t mismatches = 0, hits = 0;
+    for (auto _ : st) {
+        mismatches = hits = 0;
+        for (std::size_t k = 0; k < c.o.size(); ++k) {
+            float ta = 0, tb = 0, te = 0;
+            const auto a = c.grid->first_hit(c.o[k], c.d[k], std::numeric_limits<float>::infinity(), ta);
+            const auto b = c.bvh->first_hit(c.o[k], c.d[k], std::numeric_limits<float>::infinity(), tb);
+            const auto e = c.embree_hit(c.o[k], c.d[k], te);
+            hits += a >= 0;
+            mismatches += !(a == b && ta == tb && a == e && (a < 0 || std::abs(te - ta) <= 1e-5f * (1 + ta)));
+        }
+    }
+    st.counters["rays"] = double(c.o.size());
+    st.counters["hits"] = double(hits);
+    st.counters["mismatches"] = double(mismatches);
+}
 }  // namespace
 
+BENCHMARK_TEMPLATE(BM_Spheres, 0)->Name("Spheres_grid")->Arg(5)->Arg(6)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Spheres, 1)->Name("Spheres_bvh")->Arg(5)->Arg(6)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Spheres, 2)->Name("Spheres_embree")->Arg(5)->Arg(6)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SpheresCheckSameHits)->Arg(5)->Iterations(1);
 BENCHMARK_TEMPLATE(BM_Algorithm1, false)->Name("Algorithm1_camera")->Arg(5)->Arg(6)->Unit(benchmark::kMicrosecond);
 BENCHMARK_TEMPLATE(BM_Embree, false)->Name("Embree_camera")->Arg(5)->Arg(6)->Unit(benchmark::kMicrosecond);
 BENCHMARK_TEMPLATE(BM_Algorithm1, true)->Name("Algorithm1_interior")->Arg(5)->Arg(6)->Unit(benchmark::kMicrosecond);
