@@ -47,6 +47,7 @@
 #include "grainlight/media/discrete_particles.hpp"
 #include "grainlight/packing/particle_cloud.hpp"
 #include "grainlight/traversal/particle_grid.hpp"
+#include "embree/guo21_embree_spheres.hpp"
 #include "guo21_sphere_bvh.hpp"
 
 using namespace grainlight;
@@ -239,35 +240,14 @@ void BM_EmbreeCheckSameHits(benchmark::State& st) {
     st.counters["mismatches"] = double(mismatches);
 }
 
-
 // ---- Guo21 Fig. 20's sphere cloud: grid vs scalar BVH vs Embree spheres ----
 
 struct SphereCloud {
     std::shared_ptr<const ParticleCloud> cloud;
     std::unique_ptr<GridSphereLookup> grid;
     std::unique_ptr<guo21_bvh::SphereBvhLookup> bvh;
-    RTCDevice device = nullptr;
-    RTCScene scene = nullptr;
-    std::vector<Vec3<float>> o, d;
-    ~SphereCloud() {
-        if (scene) rtcReleaseScene(scene);
-        if (device) rtcReleaseDevice(device);
-    }
-    std::int64_t embree_hit(const Vec3<float>& org, const Vec3<float>& dir, float& t) const {
-        RTCIntersectContext ctx;
-        rtcInitIntersectContext(&ctx);
-        RTCRayHit rh{};
-        rh.ray.org_x = org.x, rh.ray.org_y = org.y, rh.ray.org_z = org.z;
-        rh.ray.dir_x = dir.x, rh.ray.dir_y = dir.y, rh.ray.dir_z = dir.z;
-        rh.ray.tnear = 1e-8f;  // 1e-5 r, as the lookups' entry test
-        rh.ray.tfar = std::numeric_limits<float>::infinity();
-        rh.ray.mask = 0xffffffffu;
-        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(scene, &ctx, &rh);
-        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return -1;
-        t = rh.ray.tfar;
-        return std::int64_t(rh.hit.primID);
-    }
+    std::unique_ptr<guo21_embree::EmbreeSphereLookup> embree;
+    std::vector<Vec3<float>> o, d, points;  // rays (outside every sphere) and probe points (any)
 };
 
 const SphereCloud& sphere_cloud(int lg) {
@@ -281,25 +261,25 @@ const SphereCloud& sphere_cloud(int lg) {
         ParticleCloud::generate_non_overlapping(box, std::uint64_t(std::pow(10.0, lg)), species, 20 + lg, 1e6));
     c->grid = std::make_unique<GridSphereLookup>(std::make_shared<ParticleGrid>(*c->cloud, ParticleGridSettings{}));
     c->bvh = std::make_unique<guo21_bvh::SphereBvhLookup>(c->cloud);
-    c->device = rtcNewDevice("threads=1");
-    c->scene = rtcNewScene(c->device);
-    RTCGeometry g = rtcNewGeometry(c->device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
-    const auto& ps = c->cloud->particles();
-    auto* v = static_cast<float*>(
-        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), ps.size()));
-    for (std::size_t i = 0; i < ps.size(); ++i) {
-        v[4 * i] = ps[i].x, v[4 * i + 1] = ps[i].y, v[4 * i + 2] = ps[i].z, v[4 * i + 3] = ps[i].r;
-    }
-    rtcCommitGeometry(g);
-    rtcAttachGeometry(c->scene, g);
-    rtcReleaseGeometry(g);
-    rtcCommitScene(c->scene);
+    c->embree = std::make_unique<guo21_embree::EmbreeSphereLookup>(c->cloud);
     Rng rng = Rng::from_key(99, std::uint64_t(lg));
     while (c->o.size() < 4096) {
         const Vec3<float> p(0.15f + 0.7f * rng.uniform<float>(), 0.05f + 0.7f * rng.uniform<float>(), 0.15f + 0.7f * rng.uniform<float>());
         if (c->grid->containing(p) >= 0) continue;
         c->o.push_back(p);
         c->d.push_back(sample_uniform_sphere(Vec2<float>(rng.uniform<float>(), rng.uniform<float>())));
+    }
+    // Probe points: half near sphere centres (inside), half uniform.
+    const auto& ps = c->cloud->particles();
+    for (int k = 0; k < 4096; ++k) {
+        if (k % 2 == 0) {
+            const CloudParticle& q = ps[std::size_t(rng.uniform<double>() * double(ps.size())) % ps.size()];
+            const Vec3<float> u = sample_uniform_sphere(Vec2<float>(rng.uniform<float>(), rng.uniform<float>()));
+            c->points.push_back(q.center() + (0.999f * q.r * std::cbrt(rng.uniform<float>())) * u);
+        } else {
+            c->points.emplace_back(0.15f + 0.7f * rng.uniform<float>(), 0.05f + 0.7f * rng.uniform<float>(),
+                                   0.15f + 0.7f * rng.uniform<float>());
+        }
     }
     return *c;
 }
@@ -312,7 +292,7 @@ void BM_Spheres(benchmark::State& st) {
         float t = 0;
         const std::int64_t h = Kind == 0   ? c.grid->first_hit(c.o[i], c.d[i], std::numeric_limits<float>::infinity(), t)
                                : Kind == 1 ? c.bvh->first_hit(c.o[i], c.d[i], std::numeric_limits<float>::infinity(), t)
-                                           : c.embree_hit(c.o[i], c.d[i], t);
+                                           : c.embree->first_hit(c.o[i], c.d[i], std::numeric_limits<float>::infinity(), t);
         hits += h >= 0;
         benchmark::DoNotOptimize(t);
         i = (i + 1) % c.o.size();
@@ -322,17 +302,23 @@ void BM_Spheres(benchmark::State& st) {
     st.counters["hit_rate"] = double(hits) / double(st.iterations());
 }
 
-/// Not timed: the three return the same first sphere at the same distance for 4096 rays.
+/// Not timed: the three return the same first sphere at the same distance for 4096 rays, and the
+/// same containing sphere for 4096 points (half of them inside a sphere).
 void BM_SpheresCheckSameHits(benchmark::State& st) {
     const SphereCloud& c = sphere_cloud(int(st.range(0)));
-    std::int64_t mismatches = 0, hits = 0;
+    std::int64_t mismatches = 0, hits = 0, inside = 0, containing_mismatches = 0;
     for (auto _ : st) {
-        mismatches = hits = 0;
+        mismatches = hits = inside = containing_mismatches = 0;
+        for (const Vec3<float>& p : c.points) {
+            const auto a = c.grid->containing(p), b = c.bvh->containing(p), e = c.embree->containing(p);
+            inside += a >= 0;
+            containing_mismatches += !(a == b && a == e);
+        }
         for (std::size_t k = 0; k < c.o.size(); ++k) {
             float ta = 0, tb = 0, te = 0;
             const auto a = c.grid->first_hit(c.o[k], c.d[k], std::numeric_limits<float>::infinity(), ta);
             const auto b = c.bvh->first_hit(c.o[k], c.d[k], std::numeric_limits<float>::infinity(), tb);
-            const auto e = c.embree_hit(c.o[k], c.d[k], te);
+            const auto e = c.embree->first_hit(c.o[k], c.d[k], std::numeric_limits<float>::infinity(), te);
             hits += a >= 0;
             mismatches += !(a == b && ta == tb && a == e && (a < 0 || std::abs(te - ta) <= 1e-5f * (1 + ta)));
         }
@@ -340,6 +326,8 @@ void BM_SpheresCheckSameHits(benchmark::State& st) {
     st.counters["rays"] = double(c.o.size());
     st.counters["hits"] = double(hits);
     st.counters["mismatches"] = double(mismatches);
+    st.counters["points_inside"] = double(inside);
+    st.counters["containing_mismatches"] = double(containing_mismatches);
 }
 }  // namespace
 

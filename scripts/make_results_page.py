@@ -79,6 +79,12 @@ KEYS = {
         ("Qback", "qback", "", ""),
         ("g", "g", "0.8669 (m = 1.33 - 1e-5 i)", "MIEV0: g Qsca / Qsca = 1.821854 / 2.096594"),
     ],
+    "guo21_ept_embree": [
+        ("EPT in Embree / ours, equal spp, N = 1e6", "time_ratio_embree[1]", "2x", "Guo21 Fig. 20 (EPT in Mitsuba's BVH)"),
+        ("EPT in Embree / ours, time to unit variance, N = 1e6", "ttuv_speedup_embree[1]", "", "measuring.md"),
+        ("EPT through the grid / ours, equal spp, N = 1e6", "time_ratio_grid[1]", "", ""),
+        ("EPT Embree vs grid, max |z|", "max_z_embree_vs_grid", "< 4 (same spheres)", "two lookups of one scene"),
+    ],
     "embree_aggregate": [
         ("image mean, EPT over Embree (green)", "mean_embree", "= library EPT mean within the error",
          "render_ept on the same scene"),

@@ -16,3 +16,19 @@ if(TARGET embree_aggregate)
                    -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
   set_tests_properties(embree_aggregate_json PROPERTIES LABELS "example;adapters;embree" TIMEOUT 300)
 endif()
+
+# guo21_ept_embree: Guo21's explicit-sphere EPT through Embree's sphere BVH and through the
+# particle grid are two renders of the same spheres (the lookups agree exactly on 4096 rays and
+# 4096 points in bench_embree's SpheresCheckSameHits; paths diverge only by float round-off of the
+# hit distances): their masked means agree within 4 combined standard errors at every N. Times are
+# reported, never asserted.
+if(TARGET guo21_ept_embree)
+  set(_gee_out ${CMAKE_CURRENT_BINARY_DIR}/guo21_ept_embree_out)
+  add_test(NAME guo21_ept_embree_json
+           COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:guo21_ept_embree>
+                   "-DARGS=--quality;quick;--threads;2;--seed;1;--out;${_gee_out}"
+                   "-DCHECKS=max_z_embree_vs_grid <= 4;rc_over_rp <= 0.1"
+                   -DEXPECT_FILE=${_gee_out}/guo21_ept_embree.csv
+                   -P ${PROJECT_SOURCE_DIR}/tests/common/check_json.cmake)
+  set_tests_properties(guo21_ept_embree_json PROPERTIES LABELS "example;adapters;embree" TIMEOUT 300)
+endif()
