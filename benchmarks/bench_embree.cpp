@@ -264,21 +264,20 @@ const SphereCloud& sphere_cloud(int lg) {
     c->embree = std::make_unique<guo21_embree::EmbreeSphereLookup>(c->cloud);
     Rng rng = Rng::from_key(99, std::uint64_t(lg));
     while (c->o.size() < 4096) {
-        const Vec3<float> p(0.15f + 0.7f * rng.uniform<float>(), 0.05f + 0.7f * rng.uniform<float>(), 0.15f + 0.7f * rng.uniform<float>());
+        const Vec3<float> p = Vec3<float>(0.15f, 0.05f, 0.15f) + 0.7f * rng.uniform3<float>();
         if (c->grid->containing(p) >= 0) continue;
         c->o.push_back(p);
-        c->d.push_back(sample_uniform_sphere(Vec2<float>(rng.uniform<float>(), rng.uniform<float>())));
+        c->d.push_back(sample_uniform_sphere(rng.uniform2<float>()));
     }
     // Probe points: half near sphere centres (inside), half uniform.
     const auto& ps = c->cloud->particles();
     for (int k = 0; k < 4096; ++k) {
         if (k % 2 == 0) {
             const CloudParticle& q = ps[std::size_t(rng.uniform<double>() * double(ps.size())) % ps.size()];
-            const Vec3<float> u = sample_uniform_sphere(Vec2<float>(rng.uniform<float>(), rng.uniform<float>()));
+            const Vec3<float> u = sample_uniform_sphere(rng.uniform2<float>());
             c->points.push_back(q.center() + (0.999f * q.r * std::cbrt(rng.uniform<float>())) * u);
         } else {
-            c->points.emplace_back(0.15f + 0.7f * rng.uniform<float>(), 0.05f + 0.7f * rng.uniform<float>(),
-                                   0.15f + 0.7f * rng.uniform<float>());
+            c->points.push_back(Vec3<float>(0.15f, 0.05f, 0.15f) + 0.7f * rng.uniform3<float>());
         }
     }
     return *c;
