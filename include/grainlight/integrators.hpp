@@ -10,6 +10,7 @@
 #include "grainlight/integrators/ept.hpp"
 #include "grainlight/integrators/hybrid.hpp"
 #include "grainlight/integrators/ms_table.hpp"
+#include "grainlight/integrators/ms_table_family.hpp"
 #include "grainlight/integrators/ms_table_quadtree.hpp"
 #include "grainlight/integrators/point_based.hpp"
 #include "grainlight/integrators/render.hpp"
