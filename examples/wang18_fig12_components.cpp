@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <string>
 
+#include "grainlight/integrators/ms_table_symmetric.hpp"
 #include "wang18_bumpy.hpp"
 
 namespace gl = grainlight;
@@ -38,6 +39,9 @@ int main(int argc, char** argv) {
             const double merge = ex.opt<double>("table-merge", 0.0,
                                                 "quadtree merge tolerance of the MS table (relative power-weighted L1 error of "
                                                 "merged blocks; 0: no merging)");
+            const int sym = ex.opt<int>("symmetric-lobes", 0,
+                                        "render with the MS table's lobes made symmetric about the source-to-point axis "
+                                        "with this many axis bins (Wang18 Sec. 4.1's GPU table; 0: the full lobes)");
             const int level = ex.opt<int>("mesh-level", 4, "icosphere subdivision level of the bumpy sphere (20 4^level triangles)");
             const double bumps = ex.opt<double>("bumps", 0.06, "relative height of the bumps");
             const std::string obj = ex.opt<std::string>(
@@ -54,6 +58,7 @@ int main(int argc, char** argv) {
             if (!(R_opt > 0.5 && R_opt <= 200)) throw gl_examples::cli_error("--radius-mfp must be in (0.5, 200]");
             if (!(tol >= 0 && tol < 0.1)) throw gl_examples::cli_error("--table-tolerance must be in [0, 0.1)");
             if (!(merge >= 0 && merge < 1)) throw gl_examples::cli_error("--table-merge must be in [0, 1)");
+            if (sym < 0 || sym > 1024) throw gl_examples::cli_error("--symmetric-lobes must be in [0, 1024]");
             if (level < 1 || level > 7) throw gl_examples::cli_error("--mesh-level must be in [1, 7]");
             if (!(bumps >= 0 && bumps < 0.3)) throw gl_examples::cli_error("--bumps must be in [0, 0.3)");
             const bool full = ex.full();
@@ -63,7 +68,15 @@ int main(int argc, char** argv) {
             const wang18::BumpyScene sc = wang18::make_bumpy_scene(W, float(R_opt), 0.7f, level, bumps, obj);
             double cpu_table = 0;
             bool cached = false;
-            const gl::MsTable<3> table = wang18::cached_table(out, sc, full, seed, cpu_table, cached, ex.root());
+            const gl::MsTable<3> table_full = wang18::cached_table(out, sc, full, seed, cpu_table, cached, ex.root());
+            // Sec. 4.1's symmetric lobes, written back onto the full direction grid so the renderer reads them unchanged.
+            std::size_t sym_bytes = 0;
+            const gl::MsTable<3> table = [&] {
+                if (sym == 0) return table_full;
+                const gl::MsSymmetricTable<3> s(table_full, std::uint32_t(sym));
+                sym_bytes = s.bytes();
+                return s.expand();
+            }();
             const gl::MsTableQuadtree<3> qtree(table, tol, merge);
             // Table 2's table: 1024 x 512 (rho, z) cells x 36 x 18 directions x 3 channels of floats.
             const double paper_dense_bytes = 1024.0 * 512.0 * 36.0 * 18.0 * 3.0 * 4.0;
@@ -105,6 +118,10 @@ int main(int argc, char** argv) {
                         "36-72 MB per material; that grid needs > 4 GB here and is not built]\n",
                         tol, merge, double(qtree.dense_bytes()) / 1e6, double(qtree.bytes()) / 1e6, qtree.stored_cells(),
                         table.grid().cells(), qtree.stored_lobes(), qtree.merged_leaves(), 8.4, paper_dense_bytes / 1e9);
+            if (sym > 0)
+                std::printf("  MS lobes made symmetric about the source-to-point axis (%d axis bins, Sec. 4.1): %.2f MB instead of "
+                            "%.2f MB dense\n",
+                            sym, double(sym_bytes) / 1e6, double(table_full.bytes()) / 1e6);
             std::printf("  %-9s %12s %12s %10s %9s %11s\n", "component", "point-based", "VPT", "VPT s.e.", "rel.diff", "e^2");
             gl_examples::Csv csv({"component", "pb_mean", "vpt_mean", "vpt_se", "rel_diff", "rel_se", "mse", "e2"});
             for (int k = 0; k < wang18::kComp; ++k) {
@@ -145,6 +162,8 @@ int main(int argc, char** argv) {
                 .num("memory_mb_table_compressed", double(qtree.bytes()) / 1e6)
                 .num("table_tolerance", tol)
                 .num("table_merge_tolerance", merge)
+                .integer("symmetric_lobes", sym)
+                .num("memory_mb_table_symmetric", double(sym_bytes) / 1e6)
                 .num("paper_table_dense_gb", 8.4)
                 .num("vpt_variance_per_sample", c.ref_var_per_sample)
                 .num("vpt_variance_half_ratio", c.var_half_ratio)
