@@ -119,6 +119,20 @@ struct MsCellCorners {
     return true;
 }
 
+/// Solid angle of direction bin j = it n_phi + ip on `grid`, counting both mirror images of the
+/// folded azimuth range (the bins of all j cover 4 pi).
+[[nodiscard]] inline double ms_bin_solid_angle(const MsTableGrid& grid, std::size_t j) noexcept {
+    const std::size_t it = j / grid.n_phi;
+    const double th0 = pi_v<double> * double(it) / grid.n_theta, th1 = pi_v<double> * double(it + 1) / grid.n_theta;
+    return 2.0 * pi_v<double> / grid.n_phi * (std::cos(th0) - std::cos(th1));
+}
+/// Volume of a cell of radial index ir on `grid` (a ring of height (z_max - z_min) / n_z) [l^3].
+[[nodiscard]] inline double ms_cell_volume(const MsTableGrid& grid, std::size_t ir) noexcept {
+    const double dr = grid.rho_max / grid.n_rho, dz = (grid.z_max - grid.z_min) / grid.n_z;
+    const double r0 = double(ir) * dr, r1 = r0 + dr;
+    return pi_v<double> * (r1 * r1 - r0 * r0) * dz;
+}
+
 /// Index of the direction bin of (cos_theta, phi) on `grid` (nearest bin).
 [[nodiscard]] inline std::size_t ms_direction_bin(const MsTableGrid& grid, double cos_theta, double phi) noexcept {
     const double theta = std::acos(std::clamp(cos_theta, -1.0, 1.0));
@@ -264,16 +278,12 @@ public:
     /// Integral of L_o over the grid volume and all directions for channel c (per unit source
     /// power): the scattered power of orders >= 2 that stays on the grid.
     [[nodiscard]] double total(std::size_t c) const noexcept {
-        const double dr = grid_.rho_max / grid_.n_rho, dz = (grid_.z_max - grid_.z_min) / grid_.n_z;
         double s = 0;
         for (std::size_t iz = 0; iz < grid_.n_z; ++iz)
             for (std::size_t ir = 0; ir < grid_.n_rho; ++ir) {
-                const double r0 = double(ir) * dr, r1 = r0 + dr;
-                const double vol = pi_v<double> * (r1 * r1 - r0 * r0) * dz;
+                const double vol = ms_cell_volume(grid_, ir);
                 for (std::size_t it = 0; it < grid_.n_theta; ++it) {
-                    const double th0 = pi_v<double> * double(it) / grid_.n_theta;
-                    const double th1 = pi_v<double> * double(it + 1) / grid_.n_theta;
-                    const double dom = 2.0 * pi_v<double> / grid_.n_phi * (std::cos(th0) - std::cos(th1));
+                    const double dom = ms_bin_solid_angle(grid_, it * grid_.n_phi);  // the same for every phi bin
                     for (std::size_t ip = 0; ip < grid_.n_phi; ++ip)
                         s += vol * dom * values_[value_index(c, iz, ir, it * grid_.n_phi + ip)];
                 }

@@ -42,16 +42,7 @@ public:
     MsTableFamily(std::vector<double> albedos, std::vector<double> gs, std::vector<MsTable<1>> tables)
         : albedos_(std::move(albedos)), gs_(std::move(gs)), tables_(std::move(tables)) {
         const char* who = "MsTableFamily";
-        check_argument(!albedos_.empty(), who, "albedos.size()", albedos_.size(), ">= 1");
-        check_argument(!gs_.empty(), who, "gs.size()", gs_.size(), ">= 1");
-        for (std::size_t i = 0; i < albedos_.size(); ++i) {
-            check_argument(albedos_[i] > 0 && albedos_[i] < 1, who, "albedo node", albedos_[i], "(0, 1)");
-            if (i > 0) check_argument(albedos_[i] > albedos_[i - 1], who, "albedo node", albedos_[i], "> the previous node");
-        }
-        for (std::size_t i = 0; i < gs_.size(); ++i) {
-            check_argument(gs_[i] > -1 && gs_[i] < 1, who, "g node", gs_[i], "(-1, 1)");
-            if (i > 0) check_argument(gs_[i] > gs_[i - 1], who, "g node", gs_[i], "> the previous node");
-        }
+        check_nodes(albedos_, gs_, who);
         check_argument(tables_.size() == albedos_.size() * gs_.size(), who, "tables.size()", tables_.size(),
                        "albedos.size() * gs.size()");
         for (std::size_t ig = 0; ig < gs_.size(); ++ig)
@@ -101,6 +92,21 @@ public:
         std::array<double, N> alb{};
         for (std::size_t c = 0; c < N; ++c) alb[c] = albedo[c];
         return MsTable<N>(grid, alb, g, photons, std::move(values));
+    }
+
+    /// Throws invalid_argument (naming `who`) unless both node lists are non-empty and strictly
+    /// increasing, albedos in (0, 1) and gs in (-1, 1).
+    static void check_nodes(const std::vector<double>& albedos, const std::vector<double>& gs, const char* who) {
+        check_argument(!albedos.empty(), who, "albedos.size()", albedos.size(), ">= 1");
+        check_argument(!gs.empty(), who, "gs.size()", gs.size(), ">= 1");
+        for (std::size_t i = 0; i < albedos.size(); ++i) {
+            check_argument(albedos[i] > 0 && albedos[i] < 1, who, "albedo node", albedos[i], "(0, 1)");
+            if (i > 0) check_argument(albedos[i] > albedos[i - 1], who, "albedo node", albedos[i], "> the previous node");
+        }
+        for (std::size_t i = 0; i < gs.size(); ++i) {
+            check_argument(gs[i] > -1 && gs[i] < 1, who, "g node", gs[i], "(-1, 1)");
+            if (i > 0) check_argument(gs[i] > gs[i - 1], who, "g node", gs[i], "> the previous node");
+        }
     }
 
     /// Albedo nodes.

@@ -48,18 +48,10 @@ public:
         merge_tolerance_ = merge_tolerance;
         if (merge_tolerance > 0.0) {
             // Cell volumes (by rho ring) and bin solid angles as in MsTable::total.
-            const double dr = grid_.rho_max / grid_.n_rho, dz = (grid_.z_max - grid_.z_min) / grid_.n_z;
             vol_.resize(grid_.n_rho);
-            for (std::size_t ir = 0; ir < grid_.n_rho; ++ir) {
-                const double r0 = double(ir) * dr, r1 = r0 + dr;
-                vol_[ir] = pi_v<double> * (r1 * r1 - r0 * r0) * dz;
-            }
+            for (std::size_t ir = 0; ir < grid_.n_rho; ++ir) vol_[ir] = ms_cell_volume(grid_, ir);
             dom_.resize(nd_);
-            for (std::size_t j = 0; j < nd_; ++j) {
-                const std::size_t it = j / grid_.n_phi;
-                const double th0 = pi_v<double> * double(it) / grid_.n_theta, th1 = pi_v<double> * double(it + 1) / grid_.n_theta;
-                dom_[j] = 2.0 * pi_v<double> / grid_.n_phi * (std::cos(th0) - std::cos(th1));
-            }
+            for (std::size_t j = 0; j < nd_; ++j) dom_[j] = ms_bin_solid_angle(grid_, j);
             double vgrid = 0;
             for (double v : vol_) vgrid += v * grid_.n_z;
             for (std::size_t c = 0; c < N; ++c) budget_per_volume_[c] = merge_tolerance * t.total(c) / vgrid;

@@ -51,7 +51,7 @@ public:
                 std::fill(power.begin(), power.end(), 0.0);
                 std::fill(omega.begin(), omega.end(), 0.0);
                 for (std::size_t j = 0; j < nd; ++j) {
-                    const double dom = bin_solid_angle(j) / (kSub * kSub);
+                    const double dom = ms_bin_solid_angle(grid_, j) / (kSub * kSub);
                     for (int s = 0; s < kSub * kSub; ++s) {
                         const std::uint32_t k = sub_bin[j * kSub * kSub + std::size_t(s)];
                         omega[k] += dom;
@@ -112,12 +112,6 @@ private:
     [[nodiscard]] std::size_t axis_bin(double cos_axis) const noexcept {
         const double th = std::acos(std::clamp(cos_axis, -1.0, 1.0));
         return std::min<std::size_t>(n_axis_ - 1, std::size_t(th / pi_v<double> * n_axis_));
-    }
-    // Solid angle of full bin j, counting both mirror images (as MsTable::total).
-    [[nodiscard]] double bin_solid_angle(std::size_t j) const noexcept {
-        const std::size_t it = j / grid_.n_phi;
-        const double th0 = pi_v<double> * double(it) / grid_.n_theta, th1 = pi_v<double> * double(it + 1) / grid_.n_theta;
-        return 2.0 * pi_v<double> / grid_.n_phi * (std::cos(th0) - std::cos(th1));
     }
     // Axis bin of every sub-direction of every full bin of cell (iz, ir).
     void sub_bins(std::size_t iz, std::size_t ir, std::vector<std::uint32_t>& out) const noexcept {

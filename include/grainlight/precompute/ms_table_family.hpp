@@ -19,18 +19,7 @@ namespace grainlight {
 /// invalid_argument otherwise (checked before any table is built).
 [[nodiscard]] inline MsTableFamily build_ms_table_family(const std::vector<double>& albedos, const std::vector<double>& gs,
                                                          const MsTableOptions& opt) {
-    // Validate the nodes on empty tables' behalf first: a bad list fails before the long build.
-    const char* who = "build_ms_table_family";
-    check_argument(!albedos.empty(), who, "albedos.size()", albedos.size(), ">= 1");
-    check_argument(!gs.empty(), who, "gs.size()", gs.size(), ">= 1");
-    for (std::size_t i = 0; i < albedos.size(); ++i) {
-        check_argument(albedos[i] > 0 && albedos[i] < 1, who, "albedo node", albedos[i], "(0, 1)");
-        if (i > 0) check_argument(albedos[i] > albedos[i - 1], who, "albedo node", albedos[i], "> the previous node");
-    }
-    for (std::size_t i = 0; i < gs.size(); ++i) {
-        check_argument(gs[i] > -1 && gs[i] < 1, who, "g node", gs[i], "(-1, 1)");
-        if (i > 0) check_argument(gs[i] > gs[i - 1], who, "g node", gs[i], "> the previous node");
-    }
+    MsTableFamily::check_nodes(albedos, gs, "build_ms_table_family");  // before the long build
     using Grey = Spectrum<1, float>;
     std::vector<MsTable<1>> tables;
     tables.reserve(albedos.size() * gs.size());
