@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <span>
@@ -45,6 +46,12 @@ struct ParticleGridSettings {
     double dilation = 0.0;
     /// Cap on the number of cells of an automatic resolution.
     std::uint64_t max_cells = std::uint64_t(1) << 28;
+    /// Software-pipelined walks (ParticleGrid::walk_voxels): -1 automatic (on when the cell
+    /// offsets, references and particle records together exceed `kPrefetchAutoBytes`, i.e. do
+    /// not fit the caches near a core), 0 off, 1 on. Results do not depend on it, only the speed.
+    int prefetch = -1;
+    /// Size above which `prefetch = -1` turns the pipelined walk on [bytes] (8 MiB).
+    static constexpr std::size_t kPrefetchAutoBytes = std::size_t(8) << 20;
 };
 
 /// Uniform voxel grid over a ParticleCloud with CSR lists of particle references (see the file
@@ -63,6 +70,7 @@ public:
         check_argument(std::isfinite(st.dilation) && st.dilation >= 0, who, "dilation", st.dilation, ">= 0 (finite)");
         check_argument(std::isfinite(st.particles_per_voxel) && st.particles_per_voxel > 0, who, "particles_per_voxel",
                        st.particles_per_voxel, "> 0 (finite)");
+        check_argument(st.prefetch >= -1 && st.prefetch <= 1, who, "prefetch", st.prefetch, "-1 (automatic), 0 or 1");
         const bool automatic = st.resolution[0] == 0 && st.resolution[1] == 0 && st.resolution[2] == 0;
         if (!automatic)
             for (int a = 0; a < 3; ++a)
@@ -131,6 +139,8 @@ public:
         std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
         for (std::uint32_t i = 0; i < cloud.size(); ++i)
             for_cells(cloud[i], [&](std::uint32_t c) { refs_[fill[c]++] = i; });
+        const std::size_t bytes = memory_bytes() + cloud.size() * sizeof(CloudParticle);
+        prefetch_ = st.prefetch == 1 || (st.prefetch == -1 && bytes > ParticleGridSettings::kPrefetchAutoBytes);
     }
 
     /// The cloud the grid references.
@@ -169,42 +179,19 @@ public:
     /// 32-bit cells, a linear cell index stepped by the axis stride, reciprocal directions, and
     /// each crossing recomputed from the integer cell (no accumulated drift). Consecutive voxels
     /// share their boundary parameter exactly (t_exit of one is t_enter of the next).
+    ///
+    /// With prefetching (ParticleGridSettings::prefetch; automatic for grids beyond the caches near
+    /// a core) the walk is software-pipelined: the DDA runs kWalkAhead voxels ahead of the
+    /// visit, and the chain of dependent loads a voxel needs (cell offsets -> references ->
+    /// particle records) is prefetched one link per step, so that the visit finds them in
+    /// cache. For large clouds a plain walk is bound by that chain's latency (docs/performance.md).
+    /// The voxels visited, their order and the results are the same either way.
     template <class Visit>
     bool walk_voxels(const Vec3<float>& o, const Vec3<float>& d, float t_min, float t_max, Visit&& visit) const noexcept {
-        float t0 = t_min, t1 = t_max;
-        if (!clip_to_box(o, d, lo_, hi_, t0, t1)) return true;
-        const Vec3<float> local = o - lo_;
-        int ix[3], step[3];
-        float inv[3], next[3];
-        std::int64_t stride[3] = {1, std::int64_t(res_[0]), std::int64_t(res_[0]) * std::int64_t(res_[1])};
-        for (int a = 0; a < 3; ++a) {
-            const float p = local[a] + t0 * d[a];
-            ix[a] = std::clamp(int(std::floor(p / h_[a])), 0, res_[a] - 1);
-            step[a] = d[a] > 0 ? 1 : (d[a] < 0 ? -1 : 0);
-            inv[a] = step[a] != 0 ? 1.0f / d[a] : 0.0f;
-        }
-        auto crossing = [&](int a) {
-            return step[a] == 0 ? std::numeric_limits<float>::infinity()
-                                : (float(ix[a] + (step[a] > 0 ? 1 : 0)) * h_[a] - local[a]) * inv[a];
-        };
-        for (int a = 0; a < 3; ++a) next[a] = crossing(a);
-        std::int64_t idx = std::int64_t(cell_index(ix[0], ix[1], ix[2]));
-        float t = t0;
-        for (;;) {
-            const int axis = (next[0] <= next[1]) ? (next[0] <= next[2] ? 0 : 2) : (next[1] <= next[2] ? 1 : 2);
-            const float tx = next[axis] < t1 ? next[axis] : t1;
-            const std::uint32_t b0 = start_[std::size_t(idx)], b1 = start_[std::size_t(idx) + 1];
-            if (b0 != b1 && tx >= t) {
-                if (!visit(std::span<const std::uint32_t>(refs_.data() + b0, refs_.data() + b1), t, tx)) return false;
-            }
-            if (!(next[axis] < t1)) return true;
-            ix[axis] += step[axis];
-            if (ix[axis] < 0 || ix[axis] >= res_[axis]) return true;
-            idx += step[axis] * stride[axis];
-            t = std::max(t, next[axis]);
-            next[axis] = crossing(axis);
-        }
+        return prefetch_ ? walk_pipelined(o, d, t_min, t_max, visit) : walk_plain(o, d, t_min, t_max, visit);
     }
+    /// True if walk_voxels prefetches (ParticleGridSettings::prefetch).
+    [[nodiscard]] bool prefetching() const noexcept { return prefetch_; }
 
     /// Every particle of the query cylinder around o + t d (unit d), t in (t_min, t_max]: centre
     /// within r_p + r_c of the axis and its nearest axis point s inside (t_min, t_max]
@@ -264,11 +251,147 @@ public:
     }
 
 private:
+    /// walk_voxels without prefetching.
+    template <class Visit>
+    bool walk_plain(const Vec3<float>& o, const Vec3<float>& d, float t_min, float t_max, Visit&& visit) const noexcept {
+        float t0 = t_min, t1 = t_max;
+        if (!clip_to_box(o, d, lo_, hi_, t0, t1)) return true;
+        const Vec3<float> local = o - lo_;
+        int ix[3], step[3];
+        float inv[3], next[3];
+        std::int64_t stride[3] = {1, std::int64_t(res_[0]), std::int64_t(res_[0]) * std::int64_t(res_[1])};
+        for (int a = 0; a < 3; ++a) {
+            const float p = local[a] + t0 * d[a];
+            ix[a] = std::clamp(int(std::floor(p / h_[a])), 0, res_[a] - 1);
+            step[a] = d[a] > 0 ? 1 : (d[a] < 0 ? -1 : 0);
+            inv[a] = step[a] != 0 ? 1.0f / d[a] : 0.0f;
+        }
+        auto crossing = [&](int a) {
+            return step[a] == 0 ? std::numeric_limits<float>::infinity()
+                                : (float(ix[a] + (step[a] > 0 ? 1 : 0)) * h_[a] - local[a]) * inv[a];
+        };
+        for (int a = 0; a < 3; ++a) next[a] = crossing(a);
+        std::int64_t idx = std::int64_t(cell_index(ix[0], ix[1], ix[2]));
+        float t = t0;
+        for (;;) {
+            const int axis = (next[0] <= next[1]) ? (next[0] <= next[2] ? 0 : 2) : (next[1] <= next[2] ? 1 : 2);
+            const float tx = next[axis] < t1 ? next[axis] : t1;
+            const std::uint32_t b0 = start_[std::size_t(idx)], b1 = start_[std::size_t(idx) + 1];
+            if (b0 != b1 && tx >= t) {
+                if (!visit(std::span<const std::uint32_t>(refs_.data() + b0, refs_.data() + b1), t, tx)) return false;
+            }
+            if (!(next[axis] < t1)) return true;
+            ix[axis] += step[axis];
+            if (ix[axis] < 0 || ix[axis] >= res_[axis]) return true;
+            idx += step[axis] * stride[axis];
+            t = std::max(t, next[axis]);
+            next[axis] = crossing(axis);
+        }
+    }
+
+    /// walk_voxels with the software pipeline.
+    template <class Visit>
+    bool walk_pipelined(const Vec3<float>& o, const Vec3<float>& d, float t_min, float t_max, Visit&& visit) const noexcept {
+        float t0 = t_min, t1 = t_max;
+        if (!clip_to_box(o, d, lo_, hi_, t0, t1)) return true;
+        const Vec3<float> local = o - lo_;
+        int ix[3], step[3];
+        float inv[3], next[3];
+        std::int64_t stride[3] = {1, std::int64_t(res_[0]), std::int64_t(res_[0]) * std::int64_t(res_[1])};
+        for (int a = 0; a < 3; ++a) {
+            const float p = local[a] + t0 * d[a];
+            ix[a] = std::clamp(int(std::floor(p / h_[a])), 0, res_[a] - 1);
+            step[a] = d[a] > 0 ? 1 : (d[a] < 0 ? -1 : 0);
+            inv[a] = step[a] != 0 ? 1.0f / d[a] : 0.0f;
+        }
+        auto crossing = [&](int a) {
+            return step[a] == 0 ? std::numeric_limits<float>::infinity()
+                                : (float(ix[a] + (step[a] > 0 ? 1 : 0)) * h_[a] - local[a]) * inv[a];
+        };
+        for (int a = 0; a < 3; ++a) next[a] = crossing(a);
+        std::int64_t idx = std::int64_t(cell_index(ix[0], ix[1], ix[2]));
+        float t = t0;
+        bool done = false;
+        // One DDA step: the current voxel (cell, t_enter, t_exit), then advance.
+        struct Voxel {
+            std::uint32_t cell, b0, b1;
+            float te, tx;
+        };
+        auto produce = [&](Voxel& v) {
+            if (done) return false;
+            const int axis = (next[0] <= next[1]) ? (next[0] <= next[2] ? 0 : 2) : (next[1] <= next[2] ? 1 : 2);
+            v = {std::uint32_t(idx), 0, 0, t, next[axis] < t1 ? next[axis] : t1};
+            if (!(next[axis] < t1)) {
+                done = true;
+                return true;
+            }
+            ix[axis] += step[axis];
+            if (ix[axis] < 0 || ix[axis] >= res_[axis]) {
+                done = true;
+                return true;
+            }
+            idx += step[axis] * stride[axis];
+            t = std::max(t, next[axis]);
+            next[axis] = crossing(axis);
+            return true;
+        };
+        const std::uint32_t* start = start_.data();
+        const std::uint32_t* refs = refs_.data();
+        const CloudParticle* ps = cloud_->particles().data();
+        constexpr int kRing = 8;  // >= kWalkAhead, power of two
+        Voxel ring[kRing];
+        int head = 0, count = 0;
+        // Stage 1 (when the DDA generates a voxel, kWalkAhead - 1 visits before its own): the
+        // cell offsets.
+        auto push = [&]() {
+            Voxel& v = ring[(head + count) & (kRing - 1)];
+            if (!produce(v)) return;
+            prefetch(start + v.cell);
+            ++count;
+        };
+        for (int k = 0; k < kWalkAhead; ++k) push();
+        for (int k = 0; k < std::min(count, kRefsAhead); ++k) ring[k].b0 = start[ring[k].cell], ring[k].b1 = start[ring[k].cell + 1];
+        while (count > 0) {
+            // Stage 2 (kRefsAhead voxels ahead): the references; stage 3 (kRecordsAhead ahead): the records.
+            if (count > kRefsAhead) {
+                Voxel& v = ring[(head + kRefsAhead) & (kRing - 1)];
+                v.b0 = start[v.cell];
+                v.b1 = start[v.cell + 1];
+                prefetch(refs + v.b0);
+            }
+            if (count > kRecordsAhead) {
+                const Voxel& v = ring[(head + kRecordsAhead) & (kRing - 1)];
+                const std::uint32_t e = std::min(v.b1, v.b0 + 8u);
+                for (std::uint32_t j = v.b0; j < e; ++j) prefetch(ps + refs[j]);
+            }
+            const Voxel v = ring[head];
+            head = (head + 1) & (kRing - 1);
+            --count;
+            push();
+            if (v.b0 != v.b1 && v.tx >= v.te) {
+                if (!visit(std::span<const std::uint32_t>(refs + v.b0, refs + v.b1), v.te, v.tx)) return false;
+            }
+        }
+        return true;
+    }
+
+    /// Voxels the walk's DDA runs ahead of the visit, and the distances (in voxels) at which a
+    /// voxel's references and particle records are prefetched (see walk_voxels): each link of
+    /// the load chain gets two voxel visits of time.
+    static constexpr int kWalkAhead = 7, kRefsAhead = 4, kRecordsAhead = 2;
+    /// A read prefetch hint (no effect where the compiler has none).
+    static void prefetch([[maybe_unused]] const void* p) noexcept {
+#if defined(__GNUC__) || defined(__clang__)
+        __builtin_prefetch(p, 0, 3);
+#endif
+    }
+
     const ParticleCloud* cloud_ = nullptr;
     std::array<int, 3> res_{1, 1, 1};
     Vec3<float> lo_{0.0f}, hi_{0.0f};
     std::array<float, 3> h_{1, 1, 1};
     float dilation_ = 0;
+    bool prefetch_ = false;
     std::vector<std::uint32_t> start_, refs_;
 };
 
