@@ -1,8 +1,9 @@
 // guo21_cornell_scene.hpp: the Cornell box of Guo21 Fig. 12 shared by guo21_fig12_cornell,
-// guo21_fig13_hg_fit and guo21_fig20_time_vs_n: a 1 m box of diffuse walls (grey: one spectral
-// channel) with a square area light in the ceiling, the box of particle centres inside it, the
-// camera, the mask of the pixels that look through the cloud, and renders split into seeded batches
-// (the mean image, per-sample variance for the time to unit variance, CPU seconds).
+// guo21_fig13_hg_fit, guo21_fig20_time_vs_n and guo21_ept_embree: a 1 m box of diffuse walls
+// (grey: one spectral channel) with a square area light in the ceiling, the box of particle centres
+// inside it, the camera, the mask of the pixels that look through the cloud, renders split into
+// seeded batches (the mean image, per-sample variance for the time to unit variance, CPU seconds),
+// and Fig. 20's set-up of EPT and ours over clouds of N ice spheres (Fig20Setup).
 #pragma once
 
 #include <algorithm>
@@ -11,7 +12,9 @@
 #include <cstdint>
 #include <ctime>
 #include <functional>
+#include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/harness.hpp"
@@ -19,10 +22,13 @@
 #include "guo21_mpi_render.hpp"
 #include "grainlight/integrators/discrete_vpt.hpp"
 #include "grainlight/integrators/render.hpp"
+#include "grainlight/media/discrete_particles.hpp"
+#include "grainlight/packing/particle_cloud.hpp"
 #include "grainlight/scene/camera.hpp"
 #include "grainlight/scene/film.hpp"
 #include "grainlight/scene/film_checkpoint.hpp"
 #include "grainlight/scene/scene.hpp"
+#include "grainlight/traversal/particle_grid.hpp"
 
 namespace guo21_cornell {
 
@@ -182,5 +188,75 @@ double masked_mean(const gl::Image& img, const std::vector<char>& mask) {
         if (mask[i]) s += img.rgb[3 * i], ++n;
     return n ? s / double(n) : 0.0;
 }
+
+/// Guo21 Fig. 20's renders in this box, shared by guo21_fig20_time_vs_n and guo21_ept_embree: clouds
+/// of N ice spheres of kRadiusUm (m = 1.31) rendered by EPT of the explicit spheres (through the
+/// particle grid or another sphere lookup) and by ours (the discrete medium, query radius r_c =
+/// rc_over_rp r_p), each width x width in `batches` seeded batches (render_scene_batches). The
+/// camera, mask, particle model and render options are the same for every N and every render.
+struct Fig20Setup {
+    static constexpr int batches = 8;
+    const gl_examples::Example& ex;
+    int width;
+    double r_p, r_c;                  ///< particle and query radius [m]
+    gl::PinholeCamera<float> camera;  ///< camera(width)
+    std::vector<char> mask;           ///< cloud_mask
+    std::size_t npix = 0;             ///< pixels in the mask
+    gl::ParticleModel model;          ///< ours: the spheres' index 1.31
+    gl::RenderOptions opt;            ///< spp, the example's threads and seed, VPT depth 256
+
+    Fig20Setup(const gl_examples::Example& example, int width_px, int spp, double rc_over_rp)
+        : ex(example), width(width_px), r_p(kRadiusUm * 1e-6), r_c(rc_over_rp * r_p), camera(guo21_cornell::camera(width_px)),
+          mask(cloud_mask(camera, width_px)) {
+        for (const char c : mask) npix += c ? 1 : 0;
+        model.particle_index = {1.31, 0.0};
+        opt.spp = spp;
+        opt.threads = ex.threads();
+        opt.seed = ex.seed();
+        opt.vpt.max_depth = 256;
+    }
+
+    /// N centres in the box [kLo, kHi], seeded by the example's seed and N: hard spheres (random
+    /// sequential addition) if `non_overlapping`, else Poisson centres.
+    [[nodiscard]] std::shared_ptr<gl::ParticleCloud> cloud(std::uint64_t N, bool non_overlapping = true) const {
+        const gl::BoxBoundary box(kLo, kHi);
+        const std::vector<gl::CloudSpecies> species{gl::cloud_species(gl::MonodispersePsd(kRadiusUm))};
+        const std::uint64_t cloud_seed = ex.seed() * 31 + 20 + N;
+        return std::make_shared<gl::ParticleCloud>(
+            non_overlapping ? gl::ParticleCloud::generate_non_overlapping(box, N, species, cloud_seed, 1e6)
+                            : gl::ParticleCloud::generate(box, N, species, cloud_seed, 1e6));
+    }
+
+    /// EPT of the explicit spheres found through `lookup` (ExplicitSphereMedium<float, Lookup>).
+    template <class Lookup>
+    [[nodiscard]] Run ept(Lookup lookup, const std::string& label) const {
+        using M = gl::ExplicitSphereMedium<float, Lookup>;
+        gl::Scene<M> sc;
+        build_cornell(sc, sc.add_medium(M(std::move(lookup), 1.31f)), 1.5 * r_p);
+        return render_scene_batches(ex, batches, opt, mask, label, width, sc, camera);
+    }
+
+    /// EPT of the explicit spheres through the particle grid of `cloud` (undilated).
+    [[nodiscard]] Run ept_grid(const gl::ParticleCloud& cloud, const std::string& label) const {
+        return ept(gl::GridSphereLookup(std::make_shared<gl::ParticleGrid>(cloud, gl::ParticleGridSettings{})), label);
+    }
+
+    /// Ours: the discrete medium of `cloud` (the grid dilated by r_c), with or without diffraction,
+    /// forced-collision floor `forced`; `medium_bytes` (if not null) receives the medium's memory.
+    [[nodiscard]] Run ours(const gl::ParticleCloud& cloud, bool diffraction, double forced, const std::string& label,
+                           std::size_t* medium_bytes = nullptr) const {
+        gl::ParticleGridSettings gs;
+        gs.dilation = r_c;
+        gl::DiscreteMediumSettings ms;
+        ms.query_radius = r_c;
+        ms.diffraction = diffraction;
+        ms.forced_collision = forced;
+        using M = gl::DiscreteParticleMedium<float>;
+        gl::Scene<M> sc;
+        build_cornell(sc, sc.add_medium(M(std::make_shared<gl::ParticleGrid>(cloud, gs), {model}, ms)), 1.5 * r_p + r_c);
+        if (medium_bytes) *medium_bytes = sc.medium(0).memory_bytes();
+        return render_scene_batches(ex, batches, opt, mask, label, width, sc, camera);
+    }
+};
 
 }  // namespace guo21_cornell

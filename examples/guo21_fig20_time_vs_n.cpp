@@ -70,19 +70,11 @@ int main(int argc, char** argv) {
                 if (!(c >= 1 && c <= 1e8)) throw gl_examples::cli_error("--counts values must be in [1, 1e8]");
             if (!(forced >= 0 && forced < 1)) throw gl_examples::cli_error("--forced-collision must be in [0, 1)");
             if (!(rc_over_rp > 0 && rc_over_rp <= 10)) throw gl_examples::cli_error("--rc-over-rp must be in (0, 10]");
-            const double r_p = guo21_cornell::kRadiusUm * 1e-6, r_c = rc_over_rp * r_p;
-            const auto camera = guo21_cornell::camera(width);
-            const std::vector<char> mask = guo21_cornell::cloud_mask(camera, width);
-            std::size_t npix = 0;
-            for (const char c : mask) npix += c ? 1 : 0;
-            gl::ParticleModel model;
-            model.particle_index = {1.31, 0.0};
-            gl::RenderOptions opt;
-            opt.spp = spp;
-            opt.threads = ex.threads();
-            opt.seed = ex.seed();
-            opt.vpt.max_depth = 256;
-            const int batches = 8;
+            const guo21_cornell::Fig20Setup setup(ex, width, spp, rc_over_rp);
+            const double r_p = setup.r_p, r_c = setup.r_c;
+            const std::vector<char>& mask = setup.mask;
+            const std::size_t npix = setup.npix;
+            const int batches = setup.batches;
             const double factor = gl::membership_extinction_factor(r_p, r_c, gl::pi_v<double> * r_p * r_p);
             std::printf("Guo21 Fig. 20 (Sec. 6.8): ice spheres r = %.0f um in the Fig. 12 Cornell box, %dx%d, %d spp, r_c = r_p / %.0f "
                         "(-FD membership factor %.3f); CPU seconds per render, %d threads\n",
@@ -97,48 +89,20 @@ int main(int argc, char** argv) {
                                   "rel_diff_no_diffraction_se", "bytes_per_particle"});
             for (double Nd : counts) {
                 const auto N = std::uint64_t(Nd);
-                const gl::BoxBoundary box(guo21_cornell::kLo, guo21_cornell::kHi);
-                const std::vector<gl::CloudSpecies> species{gl::cloud_species(gl::MonodispersePsd(guo21_cornell::kRadiusUm))};
-                const std::uint64_t cloud_seed = ex.seed() * 31 + 20 + N;
-                auto cloud = std::make_shared<gl::ParticleCloud>(
-                    hard ? gl::ParticleCloud::generate_non_overlapping(box, N, species, cloud_seed, 1e6)
-                         : gl::ParticleCloud::generate(box, N, species, cloud_seed, 1e6));
+                const auto cloud = setup.cloud(N, hard);
                 const std::string tag = "N=" + std::to_string(N);
-                guo21_cornell::Run ept;
-                {
-                    auto grid = std::make_shared<gl::ParticleGrid>(*cloud, gl::ParticleGridSettings{});
-                    using M = gl::ExplicitSphereMedium<float>;
-                    gl::Scene<M> sc;
-                    guo21_cornell::build_cornell(sc, sc.add_medium(M(grid, 1.31f)), 1.5 * r_p);
-                    ept = guo21_cornell::render_scene_batches(ex, batches, opt, mask, "EPT " + tag, width, sc, camera);
-                }
+                const guo21_cornell::Run ept = setup.ept_grid(*cloud, "EPT " + tag);
                 guo21_cornell::Run eptb;
                 if (ept_bvh) {
-                    using M = gl::ExplicitSphereMedium<float, guo21_bvh::SphereBvhLookup>;
                     const auto c0 = std::chrono::steady_clock::now();
                     guo21_bvh::SphereBvhLookup lookup(cloud);
                     v_bvh_build.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count());
-                    gl::Scene<M> sc;
-                    guo21_cornell::build_cornell(sc, sc.add_medium(M(std::move(lookup), 1.31f)), 1.5 * r_p);
-                    eptb = guo21_cornell::render_scene_batches(ex, batches, opt, mask, "EPT-BVH " + tag, width, sc, camera);
+                    eptb = setup.ept(std::move(lookup), "EPT-BVH " + tag);
                 }
-                double bytes_pp = 0;
-                auto ours = [&](bool diffraction, const std::string& label) {
-                    gl::ParticleGridSettings gs;
-                    gs.dilation = r_c;
-                    auto grid = std::make_shared<gl::ParticleGrid>(*cloud, gs);
-                    gl::DiscreteMediumSettings ms;
-                    ms.query_radius = r_c;
-                    ms.diffraction = diffraction;
-                    ms.forced_collision = forced;
-                    using M = gl::DiscreteParticleMedium<float>;
-                    gl::Scene<M> sc;
-                    guo21_cornell::build_cornell(sc, sc.add_medium(M(grid, {model}, ms)), 1.5 * r_p + r_c);
-                    bytes_pp = double(sc.medium(0).memory_bytes()) / double(N);
-                    return guo21_cornell::render_scene_batches(ex, batches, opt, mask, label + " " + tag, width, sc, camera);
-                };
-                const auto o = ours(true, "ours");
-                const auto f = ours(false, "ours -FD");
+                std::size_t medium_bytes = 0;
+                const auto o = setup.ours(*cloud, true, forced, "ours " + tag);
+                const auto f = setup.ours(*cloud, false, forced, "ours -FD " + tag, &medium_bytes);
+                const double bytes_pp = double(medium_bytes) / double(N);
                 const double me = guo21_cornell::masked_mean(ept.img, mask), mo = guo21_cornell::masked_mean(o.img, mask),
                              mf = guo21_cornell::masked_mean(f.img, mask);
                 const double tt_e = ept.ttuv(npix), tt_o = o.ttuv(npix), tt_f = f.ttuv(npix);

@@ -47,19 +47,10 @@ int main(int argc, char** argv) {
             if (counts.empty()) throw gl_examples::cli_error("--counts needs at least one value");
             for (double c : counts)
                 if (!(c >= 1 && c <= 1e8)) throw gl_examples::cli_error("--counts values must be in [1, 1e8]");
-            const double r_p = guo21_cornell::kRadiusUm * 1e-6, r_c = 0.05 * r_p;
-            const auto camera = guo21_cornell::camera(width);
-            const std::vector<char> mask = guo21_cornell::cloud_mask(camera, width);
-            std::size_t npix = 0;
-            for (const char c : mask) npix += c ? 1 : 0;
-            gl::ParticleModel model;
-            model.particle_index = {1.31, 0.0};
-            gl::RenderOptions opt;
-            opt.spp = spp;
-            opt.threads = ex.threads();
-            opt.seed = ex.seed();
-            opt.vpt.max_depth = 256;
-            const int batches = 8;
+            const guo21_cornell::Fig20Setup setup(ex, width, spp, 0.05);
+            const std::vector<char>& mask = setup.mask;
+            const std::size_t npix = setup.npix;
+            const int batches = setup.batches;
             std::printf("Guo21 Fig. 20 against EPT in Embree's BVH: ice spheres r = %.0f um (hard spheres) in the Fig. 12 Cornell box, "
                         "%dx%d, %d spp, r_c = r_p / 20; CPU seconds per render, %d threads\n",
                         guo21_cornell::kRadiusUm, width, width, spp, ex.threads());
@@ -71,41 +62,16 @@ int main(int argc, char** argv) {
                                   "mean_ept_embree", "rel_diff_embree_vs_grid", "embree_build_seconds"});
             for (double Nd : counts) {
                 const auto N = std::uint64_t(Nd);
-                const gl::BoxBoundary box(guo21_cornell::kLo, guo21_cornell::kHi);
-                const std::vector<gl::CloudSpecies> species{gl::cloud_species(gl::MonodispersePsd(guo21_cornell::kRadiusUm))};
-                auto cloud = std::make_shared<gl::ParticleCloud>(
-                    gl::ParticleCloud::generate_non_overlapping(box, N, species, ex.seed() * 31 + 20 + N, 1e6));
+                const auto cloud = setup.cloud(N);
                 const std::string tag = "N=" + std::to_string(N);
-                guo21_cornell::Run grid_run, embree_run, ours_run;
+                const guo21_cornell::Run grid_run = setup.ept_grid(*cloud, "EPT grid " + tag);
+                guo21_cornell::Run embree_run;
                 {
-                    using M = gl::ExplicitSphereMedium<float>;
-                    gl::Scene<M> sc;
-                    guo21_cornell::build_cornell(
-                        sc, sc.add_medium(M(std::make_shared<gl::ParticleGrid>(*cloud, gl::ParticleGridSettings{}), 1.31f)),
-                        1.5 * r_p);
-                    grid_run = guo21_cornell::render_scene_batches(ex, batches, opt, mask, "EPT grid " + tag, width, sc, camera);
-                }
-                {
-                    using M = gl::ExplicitSphereMedium<float, guo21_embree::EmbreeSphereLookup>;
                     guo21_embree::EmbreeSphereLookup lookup(cloud);
                     v_build.push_back(lookup.build_seconds());
-                    gl::Scene<M> sc;
-                    guo21_cornell::build_cornell(sc, sc.add_medium(M(std::move(lookup), 1.31f)), 1.5 * r_p);
-                    embree_run = guo21_cornell::render_scene_batches(ex, batches, opt, mask, "EPT Embree " + tag, width, sc, camera);
+                    embree_run = setup.ept(std::move(lookup), "EPT Embree " + tag);
                 }
-                {
-                    gl::ParticleGridSettings gs;
-                    gs.dilation = r_c;
-                    gl::DiscreteMediumSettings ms;
-                    ms.query_radius = r_c;
-                    ms.diffraction = true;
-                    ms.forced_collision = 0.5;
-                    using M = gl::DiscreteParticleMedium<float>;
-                    gl::Scene<M> sc;
-                    guo21_cornell::build_cornell(sc, sc.add_medium(M(std::make_shared<gl::ParticleGrid>(*cloud, gs), {model}, ms)),
-                                                 1.5 * r_p + r_c);
-                    ours_run = guo21_cornell::render_scene_batches(ex, batches, opt, mask, "ours " + tag, width, sc, camera);
-                }
+                const guo21_cornell::Run ours_run = setup.ours(*cloud, true, 0.5, "ours " + tag);
                 const double mg = guo21_cornell::masked_mean(grid_run.img, mask), me = guo21_cornell::masked_mean(embree_run.img, mask);
                 const double tt_g = grid_run.ttuv(npix), tt_e = embree_run.ttuv(npix), tt_o = ours_run.ttuv(npix);
                 v_n.push_back(double(N));
