@@ -157,6 +157,28 @@ TEST_CASE("ms_table_quadtree: bad input", "[ms_quadtree]") {
     CHECK_THROWS_AS(MsTableQuadtree<3>(t, 0.0, std::nan("")), std::invalid_argument);
 }
 
+namespace {
+using MultipleRenderer = PointBasedRenderer<RGBPhase, SphereShape<float>>;
+// The point-based renderer of the two renderer tests: the unit sphere of a medium with extinction
+// sigma_t, `albedo` and HG g (the table's), index 1.33, 400 light surface samples lit by a 6 x 6
+// quad light above it, only the multiple term (read from `t`), volume samples every
+// `volume_step`, light points drawn from Rng::from_key(seed).
+MultipleRenderer multiple_only_renderer(const MsTable<3>& t, float sigma_t, const RGB& albedo, float g, float volume_step,
+                                        std::uint64_t seed) {
+    const ContinuousMedium<RGBPhase, RGB> medium(RGB(sigma_t), albedo, RGBPhase(g));
+    const SphereShape<float> sphere(Vec3f(0.0f), 1.0f);
+    const QuadShape<float> quad(Vec3f(-3.0f, 2.0f, -3.0f), Vec3f(6, 0, 0), Vec3f(0, 0, 6));
+    PointBasedOptions<float> o;
+    o.single = false;
+    o.double_ = false;
+    o.bounced = false;
+    o.volume_step = volume_step;
+    Rng rng = Rng::from_key(seed);
+    return MultipleRenderer(medium, 1.33f, sphere, sphere_surface_samples(sphere, 400), Light<float, RGB>::quad_light(quad, RGB(1.0f)),
+                            o, rng, &t);
+}
+}  // namespace
+
 TEST_CASE("ms_table_quadtree: eval_dir equals the dense table's; the renderer reading it gives the same image",
           "[ms_quadtree][point_based]") {
     const MsTable<3> t = sparse_table();
@@ -173,18 +195,7 @@ TEST_CASE("ms_table_quadtree: eval_dir equals the dense table's; the renderer re
     }
     CHECK(q.dense_bytes() == t.bytes());
     // The renderer: multiple scattering from the dense table and from the quadtree, same samples.
-    const RGB albedo{0.9f, 0.6f, 0.4f};
-    const ContinuousMedium<RGBPhase, RGB> medium(RGB(2.0f), albedo, RGBPhase(0.7f));
-    const SphereShape<float> sphere(Vec3f(0.0f), 1.0f);
-    const QuadShape<float> quad(Vec3f(-3.0f, 2.0f, -3.0f), Vec3f(6, 0, 0), Vec3f(0, 0, 6));
-    PointBasedOptions<float> o;
-    o.single = false;
-    o.double_ = false;
-    o.bounced = false;
-    o.volume_step = 0.2f;
-    Rng r1 = Rng::from_key(9);
-    PointBasedRenderer<RGBPhase, SphereShape<float>> pb(medium, 1.33f, sphere, sphere_surface_samples(sphere, 400),
-                                                         Light<float, RGB>::quad_light(quad, RGB(1.0f)), o, r1, &t);
+    MultipleRenderer pb = multiple_only_renderer(t, 2.0f, RGB{0.9f, 0.6f, 0.4f}, 0.7f, 0.2f, 9);
     double dense = 0, comp = 0;
     for (int pass = 0; pass < 2; ++pass) {
         pb.use_compressed_table(pass == 0 ? nullptr : &q);
@@ -206,18 +217,7 @@ TEST_CASE("ms_table_quadtree: eval_dir equals the dense table's; the renderer re
 TEST_CASE("ms_table_quadtree: the renderer reading a merged table stays within its tolerance of the dense one",
           "[ms_quadtree][point_based]") {
     const MsTable<3> t = dense_noisy_table();
-    const RGB albedo{0.99f, 0.95f, 0.8f};
-    const ContinuousMedium<RGBPhase, RGB> medium(RGB(12.0f), albedo, RGBPhase(0.5f));  // radius 12 mfp
-    const SphereShape<float> sphere(Vec3f(0.0f), 1.0f);
-    const QuadShape<float> quad(Vec3f(-3.0f, 2.0f, -3.0f), Vec3f(6, 0, 0), Vec3f(0, 0, 6));
-    PointBasedOptions<float> o;
-    o.single = false;
-    o.double_ = false;
-    o.bounced = false;
-    o.volume_step = 0.1f;
-    Rng r1 = Rng::from_key(21);
-    PointBasedRenderer<RGBPhase, SphereShape<float>> pb(medium, 1.33f, sphere, sphere_surface_samples(sphere, 400),
-                                                         Light<float, RGB>::quad_light(quad, RGB(1.0f)), o, r1, &t);
+    MultipleRenderer pb = multiple_only_renderer(t, 12.0f, RGB{0.99f, 0.95f, 0.8f}, 0.5f, 0.1f, 21);  // radius 12 mfp
     auto render = [&](const MsTableQuadtree<3>* q) {
         pb.use_compressed_table(q);
         std::array<double, 3> s{};
