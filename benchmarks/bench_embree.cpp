@@ -14,7 +14,9 @@
 // the library's particle grid (GridSphereLookup, what ExplicitSphereMedium uses), the scalar
 // binary BVH of examples/guo21_sphere_bvh.hpp (guo21_fig20_time_vs_n's EPT-BVH baseline), and
 // Embree's RTC_GEOMETRY_TYPE_SPHERE_POINT (a production BVH over spheres); rays start at uniform
-// points of the cube outside every sphere, in uniform directions (EPT's path segments).
+// points of the cube outside every sphere, in uniform directions (EPT's path segments). The grid
+// runs with its automatic prefetch setting (Spheres_grid) and forced to the plain and the
+// software-pipelined walk (Spheres_grid_plain / _pipelined; ParticleGridSettings::prefetch).
 //   taskset -c 1 bench_embree --benchmark_filter='Spheres'
 //
 // Counters: memory_MB (Algorithm 1: its own count of tile + voxels + exemplar BVH bytes; Embree:
@@ -244,7 +246,9 @@ void BM_EmbreeCheckSameHits(benchmark::State& st) {
 
 struct SphereCloud {
     std::shared_ptr<const ParticleCloud> cloud;
-    std::unique_ptr<GridSphereLookup> grid;
+    std::unique_ptr<GridSphereLookup> grid;        // prefetch automatic (what the renders use)
+    std::unique_ptr<GridSphereLookup> grid_plain;  // the plain walk
+    std::unique_ptr<GridSphereLookup> grid_piped;  // the software-pipelined walk
     std::unique_ptr<guo21_bvh::SphereBvhLookup> bvh;
     std::unique_ptr<guo21_embree::EmbreeSphereLookup> embree;
     std::vector<Vec3<float>> o, d, points;  // rays (outside every sphere) and probe points (any)
@@ -260,6 +264,11 @@ const SphereCloud& sphere_cloud(int lg) {
     c->cloud = std::make_shared<ParticleCloud>(
         ParticleCloud::generate_non_overlapping(box, std::uint64_t(std::pow(10.0, lg)), species, 20 + lg, 1e6));
     c->grid = std::make_unique<GridSphereLookup>(std::make_shared<ParticleGrid>(*c->cloud, ParticleGridSettings{}));
+    ParticleGridSettings plain, piped;
+    plain.prefetch = 0;
+    piped.prefetch = 1;
+    c->grid_plain = std::make_unique<GridSphereLookup>(std::make_shared<ParticleGrid>(*c->cloud, plain));
+    c->grid_piped = std::make_unique<GridSphereLookup>(std::make_shared<ParticleGrid>(*c->cloud, piped));
     c->bvh = std::make_unique<guo21_bvh::SphereBvhLookup>(c->cloud);
     c->embree = std::make_unique<guo21_embree::EmbreeSphereLookup>(c->cloud);
     Rng rng = Rng::from_key(99, std::uint64_t(lg));
@@ -283,15 +292,17 @@ const SphereCloud& sphere_cloud(int lg) {
     return *c;
 }
 
-template <int Kind>  // 0: grid, 1: scalar BVH, 2: Embree
+template <int Kind>  // 0: grid (automatic prefetch), 1: scalar BVH, 2: Embree, 3: grid plain walk, 4: grid pipelined walk
 void BM_Spheres(benchmark::State& st) {
     const SphereCloud& c = sphere_cloud(int(st.range(0)));
     std::size_t i = 0, hits = 0;
+    const GridSphereLookup* grid = Kind == 3 ? c.grid_plain.get() : Kind == 4 ? c.grid_piped.get() : c.grid.get();
     for (auto _ : st) {
         float t = 0;
-        const std::int64_t h = Kind == 0   ? c.grid->first_hit(c.o[i], c.d[i], std::numeric_limits<float>::infinity(), t)
-                               : Kind == 1 ? c.bvh->first_hit(c.o[i], c.d[i], std::numeric_limits<float>::infinity(), t)
-                                           : c.embree->first_hit(c.o[i], c.d[i], std::numeric_limits<float>::infinity(), t);
+        constexpr float inf = std::numeric_limits<float>::infinity();
+        const std::int64_t h = Kind == 1   ? c.bvh->first_hit(c.o[i], c.d[i], inf, t)
+                               : Kind == 2 ? c.embree->first_hit(c.o[i], c.d[i], inf, t)
+                                           : grid->first_hit(c.o[i], c.d[i], inf, t);
         hits += h >= 0;
         benchmark::DoNotOptimize(t);
         i = (i + 1) % c.o.size();
@@ -318,8 +329,12 @@ void BM_SpheresCheckSameHits(benchmark::State& st) {
             const auto a = c.grid->first_hit(c.o[k], c.d[k], std::numeric_limits<float>::infinity(), ta);
             const auto b = c.bvh->first_hit(c.o[k], c.d[k], std::numeric_limits<float>::infinity(), tb);
             const auto e = c.embree->first_hit(c.o[k], c.d[k], std::numeric_limits<float>::infinity(), te);
+            float tp = 0, tq = 0;
+            const auto p = c.grid_plain->first_hit(c.o[k], c.d[k], std::numeric_limits<float>::infinity(), tp);
+            const auto q = c.grid_piped->first_hit(c.o[k], c.d[k], std::numeric_limits<float>::infinity(), tq);
             hits += a >= 0;
             mismatches += !(a == b && ta == tb && a == e && (a < 0 || std::abs(te - ta) <= 1e-5f * (1 + ta)));
+            mismatches += !(p == a && q == a && tp == ta && tq == ta);
         }
     }
     st.counters["rays"] = double(c.o.size());
@@ -333,7 +348,9 @@ void BM_SpheresCheckSameHits(benchmark::State& st) {
 BENCHMARK_TEMPLATE(BM_Spheres, 0)->Name("Spheres_grid")->Arg(5)->Arg(6)->Unit(benchmark::kMicrosecond);
 BENCHMARK_TEMPLATE(BM_Spheres, 1)->Name("Spheres_bvh")->Arg(5)->Arg(6)->Unit(benchmark::kMicrosecond);
 BENCHMARK_TEMPLATE(BM_Spheres, 2)->Name("Spheres_embree")->Arg(5)->Arg(6)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_SpheresCheckSameHits)->Arg(5)->Iterations(1);
+BENCHMARK_TEMPLATE(BM_Spheres, 3)->Name("Spheres_grid_plain")->Arg(5)->Arg(6)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Spheres, 4)->Name("Spheres_grid_pipelined")->Arg(5)->Arg(6)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SpheresCheckSameHits)->Arg(5)->Arg(6)->Iterations(1);
 BENCHMARK_TEMPLATE(BM_Algorithm1, false)->Name("Algorithm1_camera")->Arg(5)->Arg(6)->Unit(benchmark::kMicrosecond);
 BENCHMARK_TEMPLATE(BM_Embree, false)->Name("Embree_camera")->Arg(5)->Arg(6)->Unit(benchmark::kMicrosecond);
 BENCHMARK_TEMPLATE(BM_Algorithm1, true)->Name("Algorithm1_interior")->Arg(5)->Arg(6)->Unit(benchmark::kMicrosecond);
