@@ -251,42 +251,75 @@ public:
     }
 
 private:
+    /// The 3D-DDA of walk_voxels over [t0, t1] (already clipped to the grid): next() returns the
+    /// crossed voxels in order (cell, t_enter, t_exit), empty ones included.
+    class VoxelStepper {
+    public:
+        VoxelStepper(const ParticleGrid& g, const Vec3<float>& o, const Vec3<float>& d, float t0, float t1) noexcept
+            : g_(g), local_(o - g.lo_), t_(t0), t1_(t1) {
+            stride_[0] = 1;
+            stride_[1] = std::int64_t(g.res_[0]);
+            stride_[2] = std::int64_t(g.res_[0]) * std::int64_t(g.res_[1]);
+            for (int a = 0; a < 3; ++a) {
+                const float p = local_[a] + t0 * d[a];
+                ix_[a] = std::clamp(int(std::floor(p / g.h_[a])), 0, g.res_[a] - 1);
+                step_[a] = d[a] > 0 ? 1 : (d[a] < 0 ? -1 : 0);
+                inv_[a] = step_[a] != 0 ? 1.0f / d[a] : 0.0f;
+            }
+            for (int a = 0; a < 3; ++a) next_[a] = crossing(a);
+            idx_ = std::int64_t(g.cell_index(ix_[0], ix_[1], ix_[2]));
+        }
+        /// The current voxel, then advance; false once the walk has left [t0, t1] or the grid.
+        bool next(std::uint32_t& cell, float& te, float& tx) noexcept {
+            if (done_) return false;
+            const int axis = (next_[0] <= next_[1]) ? (next_[0] <= next_[2] ? 0 : 2) : (next_[1] <= next_[2] ? 1 : 2);
+            cell = std::uint32_t(idx_);
+            te = t_;
+            tx = next_[axis] < t1_ ? next_[axis] : t1_;
+            if (!(next_[axis] < t1_)) {
+                done_ = true;
+                return true;
+            }
+            ix_[axis] += step_[axis];
+            if (ix_[axis] < 0 || ix_[axis] >= g_.res_[axis]) {
+                done_ = true;
+                return true;
+            }
+            idx_ += step_[axis] * stride_[axis];
+            t_ = std::max(t_, next_[axis]);
+            next_[axis] = crossing(axis);
+            return true;
+        }
+
+    private:
+        [[nodiscard]] float crossing(int a) const noexcept {
+            return step_[a] == 0 ? std::numeric_limits<float>::infinity()
+                                 : (float(ix_[a] + (step_[a] > 0 ? 1 : 0)) * g_.h_[a] - local_[a]) * inv_[a];
+        }
+        const ParticleGrid& g_;
+        Vec3<float> local_;
+        int ix_[3], step_[3];
+        float inv_[3], next_[3];
+        std::int64_t stride_[3], idx_ = 0;
+        float t_, t1_;
+        bool done_ = false;
+    };
+
     /// walk_voxels without prefetching.
     template <class Visit>
     bool walk_plain(const Vec3<float>& o, const Vec3<float>& d, float t_min, float t_max, Visit&& visit) const noexcept {
         float t0 = t_min, t1 = t_max;
         if (!clip_to_box(o, d, lo_, hi_, t0, t1)) return true;
-        const Vec3<float> local = o - lo_;
-        int ix[3], step[3];
-        float inv[3], next[3];
-        std::int64_t stride[3] = {1, std::int64_t(res_[0]), std::int64_t(res_[0]) * std::int64_t(res_[1])};
-        for (int a = 0; a < 3; ++a) {
-            const float p = local[a] + t0 * d[a];
-            ix[a] = std::clamp(int(std::floor(p / h_[a])), 0, res_[a] - 1);
-            step[a] = d[a] > 0 ? 1 : (d[a] < 0 ? -1 : 0);
-            inv[a] = step[a] != 0 ? 1.0f / d[a] : 0.0f;
-        }
-        auto crossing = [&](int a) {
-            return step[a] == 0 ? std::numeric_limits<float>::infinity()
-                                : (float(ix[a] + (step[a] > 0 ? 1 : 0)) * h_[a] - local[a]) * inv[a];
-        };
-        for (int a = 0; a < 3; ++a) next[a] = crossing(a);
-        std::int64_t idx = std::int64_t(cell_index(ix[0], ix[1], ix[2]));
-        float t = t0;
-        for (;;) {
-            const int axis = (next[0] <= next[1]) ? (next[0] <= next[2] ? 0 : 2) : (next[1] <= next[2] ? 1 : 2);
-            const float tx = next[axis] < t1 ? next[axis] : t1;
-            const std::uint32_t b0 = start_[std::size_t(idx)], b1 = start_[std::size_t(idx) + 1];
-            if (b0 != b1 && tx >= t) {
-                if (!visit(std::span<const std::uint32_t>(refs_.data() + b0, refs_.data() + b1), t, tx)) return false;
+        VoxelStepper dda(*this, o, d, t0, t1);
+        std::uint32_t cell;
+        float te, tx;
+        while (dda.next(cell, te, tx)) {
+            const std::uint32_t b0 = start_[cell], b1 = start_[std::size_t(cell) + 1];
+            if (b0 != b1 && tx >= te) {
+                if (!visit(std::span<const std::uint32_t>(refs_.data() + b0, refs_.data() + b1), te, tx)) return false;
             }
-            if (!(next[axis] < t1)) return true;
-            ix[axis] += step[axis];
-            if (ix[axis] < 0 || ix[axis] >= res_[axis]) return true;
-            idx += step[axis] * stride[axis];
-            t = std::max(t, next[axis]);
-            next[axis] = crossing(axis);
         }
+        return true;
     }
 
     /// walk_voxels with the software pipeline.
@@ -294,46 +327,10 @@ private:
     bool walk_pipelined(const Vec3<float>& o, const Vec3<float>& d, float t_min, float t_max, Visit&& visit) const noexcept {
         float t0 = t_min, t1 = t_max;
         if (!clip_to_box(o, d, lo_, hi_, t0, t1)) return true;
-        const Vec3<float> local = o - lo_;
-        int ix[3], step[3];
-        float inv[3], next[3];
-        std::int64_t stride[3] = {1, std::int64_t(res_[0]), std::int64_t(res_[0]) * std::int64_t(res_[1])};
-        for (int a = 0; a < 3; ++a) {
-            const float p = local[a] + t0 * d[a];
-            ix[a] = std::clamp(int(std::floor(p / h_[a])), 0, res_[a] - 1);
-            step[a] = d[a] > 0 ? 1 : (d[a] < 0 ? -1 : 0);
-            inv[a] = step[a] != 0 ? 1.0f / d[a] : 0.0f;
-        }
-        auto crossing = [&](int a) {
-            return step[a] == 0 ? std::numeric_limits<float>::infinity()
-                                : (float(ix[a] + (step[a] > 0 ? 1 : 0)) * h_[a] - local[a]) * inv[a];
-        };
-        for (int a = 0; a < 3; ++a) next[a] = crossing(a);
-        std::int64_t idx = std::int64_t(cell_index(ix[0], ix[1], ix[2]));
-        float t = t0;
-        bool done = false;
-        // One DDA step: the current voxel (cell, t_enter, t_exit), then advance.
+        VoxelStepper dda(*this, o, d, t0, t1);
         struct Voxel {
             std::uint32_t cell, b0, b1;
             float te, tx;
-        };
-        auto produce = [&](Voxel& v) {
-            if (done) return false;
-            const int axis = (next[0] <= next[1]) ? (next[0] <= next[2] ? 0 : 2) : (next[1] <= next[2] ? 1 : 2);
-            v = {std::uint32_t(idx), 0, 0, t, next[axis] < t1 ? next[axis] : t1};
-            if (!(next[axis] < t1)) {
-                done = true;
-                return true;
-            }
-            ix[axis] += step[axis];
-            if (ix[axis] < 0 || ix[axis] >= res_[axis]) {
-                done = true;
-                return true;
-            }
-            idx += step[axis] * stride[axis];
-            t = std::max(t, next[axis]);
-            next[axis] = crossing(axis);
-            return true;
         };
         const std::uint32_t* start = start_.data();
         const std::uint32_t* refs = refs_.data();
@@ -345,7 +342,8 @@ private:
         // cell offsets.
         auto push = [&]() {
             Voxel& v = ring[(head + count) & (kRing - 1)];
-            if (!produce(v)) return;
+            if (!dda.next(v.cell, v.te, v.tx)) return;
+            v.b0 = v.b1 = 0;
             prefetch(start + v.cell);
             ++count;
         };
