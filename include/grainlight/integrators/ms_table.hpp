@@ -204,6 +204,22 @@ public:
         inv_dz_ = grid_.n_z / (grid_.z_max - grid_.z_min);
     }
 
+    /// A table with `grid` and no values (empty(); eval returns 0): the layout the builder indexes
+    /// its histograms with (value_index, direction_bin, bin_direction). Throws invalid_argument on
+    /// a bad grid.
+    [[nodiscard]] static MsTable layout(const MsTableGrid& grid, const std::array<double, N>& albedo, double mean_cosine,
+                                        std::uint64_t photons) {
+        grid.check("MsTable::layout");
+        MsTable t;
+        t.grid_ = grid;
+        t.g_ = mean_cosine;
+        t.albedo_ = albedo;
+        t.photons_ = photons;
+        t.inv_dr_ = grid.n_rho / grid.rho_max;
+        t.inv_dz_ = grid.n_z / (grid.z_max - grid.z_min);
+        return t;
+    }
+
     /// Precompute with the walk kernel (defined in precompute/ms_table.hpp; include it).
     template <class Phase>
     [[nodiscard]] static MsTable build(const Phase& phase, const Spectrum<N, typename Phase::Float>& albedo,

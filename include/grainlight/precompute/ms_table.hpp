@@ -24,6 +24,7 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -45,6 +46,52 @@
 
 namespace grainlight {
 
+/// How build_ms_table accumulates the histogram of scattering events (both give the same table
+/// on any thread count; they differ in memory and in the last bits of the values).
+enum class MsTableTally : std::uint8_t {
+    /// `per_block` while opt.blocks histograms of doubles fit in ms_table_block_budget bytes,
+    /// `shared` above.
+    automatic,
+    /// One double histogram per source-particle block, summed in block order (what
+    /// build_ms_table_blocks returns to split a build over processes). Memory: blocks x 8 bytes
+    /// per table value.
+    per_block,
+    /// One histogram for the whole build, every event added atomically in 32.32 fixed point
+    /// (integer addition is associative, so the sum is exact and independent of the order the
+    /// threads add in). Memory: 8 bytes per table value. A deposit is rounded to 2^-32 of the
+    /// source power (the walks' weights are at most ~1; a bin overflows only past 4e9 unit
+    /// deposits).
+    shared,
+};
+
+/// Largest memory (bytes) the `automatic` tally gives to the per-block histograms.
+inline constexpr std::size_t ms_table_block_budget = std::size_t(1) << 30;
+
+/// What a table build measured besides the table (build_ms_table's optional output).
+struct MsTableBuildInfo {
+    /// The tally used (never `automatic`).
+    MsTableTally tally = MsTableTally::per_block;
+    /// Bytes of the histograms held during the build.
+    std::size_t histogram_bytes = 0;
+    /// Tallied scattering events per (z, rho) cell (index iz n_rho + ir), all source particles.
+    std::vector<std::uint64_t> cell_events;
+    /// Per (z, rho) cell and channel (index (c n_z + iz) n_rho + ir): the tallied power (sum of
+    /// the event weights, in units of the source power; the cell's histogram summed over bins).
+    std::vector<double> cell_weight;
+    /// Per (z, rho) cell and channel (same index): the sum over source particles of the square
+    /// of each particle's deposit in the cell, sum_p X_p^2, in units of the squared source
+    /// power: the variance estimate of the cell's tallied power (particles are independent; the
+    /// events of one particle are not, so they are summed before squaring).
+    std::vector<double> cell_weight2;
+    /// Per channel: the relative noise of the tallied power, power-weighted over the cells,
+    ///     sum_cells sqrt(sum_p X_p^2) / sum_cells sum_p X_p,
+    /// i.e. the relative standard error of a cell's power averaged with the cell's power as
+    /// weight. (The square root of a variance estimate is low on average where a cell holds few
+    /// particles, so this summary is a little low for small builds; cell_weight2 itself is
+    /// unbiased.)
+    std::vector<double> relative_noise;
+};
+
 /// Options of the table precomputation.
 struct MsTableOptions {
     int n_rho = 32;             ///< radial cells (paper: 1024)
@@ -61,6 +108,11 @@ struct MsTableOptions {
     /// same table on any thread count.
     std::uint64_t seed = 1;
     int blocks = 16;            ///< fixed number of tally blocks (deterministic for any thread count)
+    /// How the events are accumulated (MsTableTally): `automatic` (default) keeps one double
+    /// histogram per block while those fit in ms_table_block_budget bytes, and otherwise one
+    /// shared fixed-point histogram (the paper's 1024 x 512 x 18 x 36 grid needs 16 x 4 GB per
+    /// block, 4 GB shared).
+    MsTableTally tally = MsTableTally::automatic;
 };
 
 /// File kind of a stored MsTable in the shared container.
@@ -73,34 +125,90 @@ template <class M>
 using InfiniteMediumScene = UnboundedMediumScene<M>;
 
 namespace detail {
+/// Table bin of a scattering event at p with incoming direction d: the value index of channel 0
+/// and the (z, rho) cell; false when the event is outside the grid.
+template <std::size_t N>
+inline bool ms_table_event_bin(const MsTable<N>& t, const Vec3<double>& p, const Vec3<double>& d, std::size_t& index0,
+                               std::size_t& cell) noexcept {
+    const MsTableGrid& g = t.grid();
+    const double rho = std::sqrt(p.x * p.x + p.y * p.y);
+    if (rho >= g.rho_max || p.z < g.z_min || p.z >= g.z_max) return false;
+    const std::size_t ir = std::min<std::size_t>(g.n_rho - 1, std::size_t(rho / g.rho_max * g.n_rho));
+    const std::size_t iz = std::min<std::size_t>(g.n_z - 1, std::size_t((p.z - g.z_min) / (g.z_max - g.z_min) * g.n_z));
+    double ex = 1, ey = 0;
+    if (rho > 0) {
+        ex = p.x / rho;
+        ey = p.y / rho;
+    }
+    const double lx = d.x * ex + d.y * ey, ly = -d.x * ey + d.y * ex;
+    const std::size_t j = t.direction_bin(d.z, std::atan2(std::abs(ly), lx));
+    index0 = t.value_index(0, iz, ir, j);
+    cell = iz * g.n_rho + ir;
+    return true;
+}
+
+/// 32.32 fixed point of the shared tally.
+inline constexpr double ms_table_fixed_scale = 4294967296.0;
+
 /// Walk callbacks of the table builder: histogram scattering events of order >= 2 by cell and
-/// incoming direction.
+/// incoming direction, into a per-block double histogram (`h`) or, when `shared` is set, into
+/// the build's one fixed-point histogram (atomic adds). `events` (optional, per cell) counts
+/// the events; `weight` and `weight2` (optional together, per cell and channel) sum their
+/// weights and squared weights.
 template <std::size_t N, class F, class S>
-struct MsTableTally {
+struct MsTableEventTally {
     const MsTable<N>& t;
-    std::vector<double>& h;
-    double escape2;
+    std::vector<double>* h = nullptr;
+    std::uint64_t* shared = nullptr;
+    std::uint64_t* events = nullptr;
+    double* weight = nullptr;
+    double* weight2 = nullptr;
+    double escape2 = 0;
+    // Per-particle sums per cell (with `weight`): the cells the current particle touched and its
+    // deposits there, squared into weight2 at end_particle().
+    std::vector<double> particle_sum;
+    std::vector<std::uint32_t> touched;
     template <class M>
     bool on_scatter(PathState<F, S>& st, const Interaction<F, S>& it, const M&) noexcept {
         const Vec3<double> p(it.p);
         if (glm::dot(p, p) > escape2) return false;
         if (st.depth < 2) return true;
-        const MsTableGrid& g = t.grid();
-        const double rho = std::sqrt(p.x * p.x + p.y * p.y);
-        if (rho >= g.rho_max || p.z < g.z_min || p.z >= g.z_max) return true;
-        const std::size_t ir = std::min<std::size_t>(g.n_rho - 1, std::size_t(rho / g.rho_max * g.n_rho));
-        const std::size_t iz =
-            std::min<std::size_t>(g.n_z - 1, std::size_t((p.z - g.z_min) / (g.z_max - g.z_min) * g.n_z));
-        const Vec3<double> d(st.ray.d);
-        double ex = 1, ey = 0;
-        if (rho > 0) {
-            ex = p.x / rho;
-            ey = p.y / rho;
+        std::size_t i0 = 0, cell = 0;
+        if (!ms_table_event_bin(t, p, Vec3<double>(st.ray.d), i0, cell)) return true;
+        const std::size_t stride = t.grid().cells() * t.grid().directions();  // one channel
+        bool first = false;
+        if (weight) {
+            first = true;
+            for (std::size_t c = 0; c < N && first; ++c) first = particle_sum[cell * N + c] == 0.0;
         }
-        const double lx = d.x * ex + d.y * ey, ly = -d.x * ey + d.y * ex;
-        const std::size_t j = t.direction_bin(d.z, std::atan2(std::abs(ly), lx));
-        for (std::size_t c = 0; c < N; ++c) h[t.value_index(c, iz, ir, j)] += double(st.throughput[c]);
+        for (std::size_t c = 0; c < N; ++c) {
+            const double w = double(st.throughput[c]);
+            if (shared) {
+                const auto q = std::uint64_t(std::llround(w * ms_table_fixed_scale));
+                std::atomic_ref<std::uint64_t>(shared[i0 + c * stride]).fetch_add(q, std::memory_order_relaxed);
+            } else {
+                (*h)[i0 + c * stride] += w;
+            }
+            if (weight) {
+                weight[c * t.grid().cells() + cell] += w;
+                particle_sum[cell * N + c] += w;
+            }
+        }
+        if (first) touched.push_back(std::uint32_t(cell));
+        if (events) ++events[cell];
         return true;
+    }
+    /// Close the current particle: add the square of its sum in every touched cell to weight2.
+    void end_particle() noexcept {
+        if (!weight) return;
+        const std::size_t cells = t.grid().cells();
+        for (const std::uint32_t cell : touched)
+            for (std::size_t c = 0; c < N; ++c) {
+                double& x = particle_sum[std::size_t(cell) * N + c];
+                weight2[c * cells + cell] += x * x;
+                x = 0.0;
+            }
+        touched.clear();
     }
 };
 }  // namespace detail
@@ -159,12 +267,11 @@ std::array<double, N> ms_table_albedo(const Spectrum<N, F>& albedo) {
     return alb;
 }
 
-/// A zero table with the final grid: the tally and the finish step use its index helpers.
+/// The table's layout (grid, no values): the tally and the finish step use its index helpers.
 template <std::size_t N, class Phase>
 MsTable<N> ms_table_shape(const Phase& phase, const std::array<double, N>& alb, const MsTableGrid& grid,
                           const MsTableOptions& opt) {
-    const std::size_t n_all = N * grid.cells() * grid.directions();
-    return MsTable<N>(grid, alb, double(phase.mean_cosine()[0]), opt.photons, std::vector<float>(n_all, 0.0f));
+    return MsTable<N>::layout(grid, alb, double(phase.mean_cosine()[0]), opt.photons);
 }
 
 template <std::size_t N, class Phase>
@@ -181,6 +288,141 @@ void check_ms_table_phase() {
     return std::uint64_t(opt.blocks);
 }
 
+namespace detail {
+/// Trace source particles [p0, p1) of the build `opt` (particle i draws from
+/// Rng::from_key(opt.seed, "MST", i)) through `scene`, reporting to `tally`.
+template <class Scene, class Phase, class Tally>
+void ms_table_walk_particles(const Scene& scene, const Phase& phase, const MsTableOptions& opt, std::uint64_t p0,
+                             std::uint64_t p1, Tally& tally) {
+    using F = typename Phase::Float;
+    using S = typename Phase::Spectrum;
+    WalkOptions<F> wopt;
+    wopt.mode = TransportMode::importance;
+    wopt.rr_depth = 1 << 20;
+    for (std::uint64_t i = p0; i < p1; ++i) {
+        Rng rng = Rng::from_key(opt.seed, 0x4d5354ull, i);
+        const auto ps = phase.sample(Vec3<F>(F(0), F(0), F(1)), rng.template uniform2<F>());
+        if (!(ps.pdf > F(0))) continue;
+        PathState<F, S> st = start_path<F, S>(Ray<F>(Vec3<F>(F(0)), ps.w), 0, S(F(1)) * ps.weight);
+        (void)walk(scene, st, rng, tally, wopt);
+        if constexpr (requires { tally.end_particle(); }) tally.end_particle();
+    }
+}
+
+/// Phase matrix between direction bins (row i: incoming bin, column j: outgoing), averaged over
+/// the mirror images (+phi, -phi) of the incoming bin.
+template <std::size_t N, class Phase>
+std::vector<double> ms_table_phase_matrix(const Phase& phase, const MsTable<N>& shape) {
+    using F = typename Phase::Float;
+    const std::size_t n_dir = shape.grid().directions();
+    std::vector<double> pm(n_dir * n_dir);
+    for (std::size_t i = 0; i < n_dir; ++i) {
+        const Vec3<double> wi = shape.bin_direction(i, false), wi2 = shape.bin_direction(i, true);
+        for (std::size_t j = 0; j < n_dir; ++j) {
+            const Vec3<double> wj = shape.bin_direction(j, false);
+            const auto a = phase.eval(Vec3<F>(wi), Vec3<F>(wj)).value[0];
+            const auto b = phase.eval(Vec3<F>(wi2), Vec3<F>(wj)).value[0];
+            pm[i * n_dir + j] = 0.5 * (double(a) + double(b));
+        }
+    }
+    return pm;
+}
+
+/// The table values from the incoming-direction histogram sum(k) (k a value index): each cell's
+/// histogram times the phase matrix, over the cell volume and the photon count. Cells with an
+/// empty histogram stay 0. The terms are added in increasing incoming bin (the same doubles for
+/// any thread count).
+template <std::size_t N, class Sum>
+std::vector<float> ms_table_values(const MsTable<N>& shape, const std::vector<double>& pm, std::uint64_t photons,
+                                   const Sum& sum) {
+    const MsTableGrid& grid = shape.grid();
+    const std::size_t n_dir = grid.directions();
+    std::vector<float> values(N * grid.cells() * n_dir, 0.0f);
+    const double dr = grid.rho_max / grid.n_rho, dz = (grid.z_max - grid.z_min) / grid.n_z;
+    const std::int64_t rows = std::int64_t(N) * grid.n_z;
+#if defined(_OPENMP)
+#pragma omp parallel for schedule(dynamic, 4) if (rows * std::int64_t(grid.n_rho) * std::int64_t(n_dir) > (1 << 22))
+#endif
+    for (std::int64_t row = 0; row < rows; ++row) {
+        const std::size_t c = std::size_t(row) / grid.n_z, iz = std::size_t(row) % grid.n_z;
+        std::vector<double> acc(n_dir);
+        for (std::size_t ir = 0; ir < grid.n_rho; ++ir) {
+            const double r0 = double(ir) * dr, r1 = r0 + dr;
+            const double vol = pi_v<double> * (r1 * r1 - r0 * r0) * dz;
+            const std::size_t base = shape.value_index(c, iz, ir, 0);
+            std::fill(acc.begin(), acc.end(), 0.0);
+            bool any = false;
+            for (std::size_t i = 0; i < n_dir; ++i) {
+                const double si = sum(base + i);
+                if (si == 0.0) continue;  // adds +0 to every term: skipping it changes no bit
+                any = true;
+                const double* row_i = pm.data() + i * n_dir;
+                for (std::size_t j = 0; j < n_dir; ++j) acc[j] += si * row_i[j];
+            }
+            if (!any) continue;
+            for (std::size_t j = 0; j < n_dir; ++j) values[base + j] = float(acc[j] / (double(photons) * vol));
+        }
+    }
+    return values;
+}
+
+/// Per-block event statistics of a build (MsTableBuildInfo's cell_events and cell_weight2 before
+/// they are summed in block order).
+struct MsTableBlockStats {
+    std::vector<std::vector<std::uint64_t>> events;
+    std::vector<std::vector<double>> weight, weight2;
+};
+
+/// Trace the source-particle blocks [b0, b1) of the build `opt` on this process's threads, into
+/// per-block double histograms (`hist`, one per block, sized here) or into the shared 32.32
+/// fixed-point histogram `shared` (exactly one of them non-null); `stats` (optional) gets each
+/// block's event counts and squared weights per cell.
+template <std::size_t N, class Phase>
+void ms_table_trace_blocks(const Phase& phase, const Spectrum<N, typename Phase::Float>& albedo,
+                           const MsTableOptions& opt, const MsTable<N>& shape, std::uint64_t b0, std::uint64_t b1,
+                           std::vector<std::vector<double>>* hist, std::uint64_t* shared, MsTableBlockStats* stats) {
+    using F = typename Phase::Float;
+    using S = Spectrum<N, F>;
+    using Medium = ContinuousMedium<Phase, S>;
+    const Medium medium(S(F(1)), albedo, phase);
+    const InfiniteMediumScene<Medium> scene{medium};
+    const std::size_t n_all = N * shape.grid().cells() * shape.grid().directions();
+    const std::size_t cells = shape.grid().cells();
+    const std::int64_t n_blocks = std::int64_t(b1 - b0);
+    if (stats) {
+        stats->events.resize(std::size_t(n_blocks));
+        stats->weight.resize(std::size_t(n_blocks));
+        stats->weight2.resize(std::size_t(n_blocks));
+    }
+    const std::uint64_t per_block = (opt.photons + std::uint64_t(opt.blocks) - 1) / std::uint64_t(opt.blocks);
+#if defined(_OPENMP)
+#pragma omp parallel for schedule(dynamic, 1)
+#endif
+    for (std::int64_t k = 0; k < n_blocks; ++k) {
+        const std::uint64_t b = b0 + std::uint64_t(k);
+        MsTableEventTally<N, F, S> tally{shape, nullptr, nullptr, nullptr, nullptr, nullptr, 0.0, {}, {}};
+        if (hist) {
+            (*hist)[std::size_t(k)].assign(n_all, 0.0);
+            tally.h = &(*hist)[std::size_t(k)];
+        }
+        tally.shared = shared;
+        if (stats) {
+            stats->events[std::size_t(k)].assign(cells, 0);
+            stats->weight[std::size_t(k)].assign(N * cells, 0.0);
+            stats->weight2[std::size_t(k)].assign(N * cells, 0.0);
+            tally.events = stats->events[std::size_t(k)].data();
+            tally.weight = stats->weight[std::size_t(k)].data();
+            tally.weight2 = stats->weight2[std::size_t(k)].data();
+            tally.particle_sum.assign(N * cells, 0.0);
+        }
+        tally.escape2 = opt.escape_radius * opt.escape_radius;
+        const std::uint64_t p0 = std::min(opt.photons, b * per_block);
+        const std::uint64_t p1 = std::min(opt.photons, p0 + per_block);
+        ms_table_walk_particles(scene, phase, opt, p0, p1, tally);
+    }
+}
+}  // namespace detail
+
 /// Trace the source-particle blocks [block_begin, block_end) of the table build `opt` (particles
 /// keyed by their global index: the result does not depend on how the build is split) and return
 /// their histograms. Throws invalid_argument on bad options or a block range outside the build.
@@ -189,45 +431,16 @@ template <std::size_t N, class Phase>
                                                       const Spectrum<N, typename Phase::Float>& albedo,
                                                       const MsTableOptions& opt, std::uint64_t block_begin,
                                                       std::uint64_t block_end) {
-    using F = typename Phase::Float;
-    using S = Spectrum<N, F>;
     detail::check_ms_table_phase<N, Phase>();
     const MsTableGrid grid = detail::ms_table_grid(opt);
     const std::array<double, N> alb = detail::ms_table_albedo(albedo);
     check_argument(block_begin <= block_end && block_end <= std::uint64_t(opt.blocks), "build_ms_table_blocks",
                    "block range end", double(block_end), "block_begin <= block_end <= opt.blocks");
-    const std::size_t n_all = N * grid.cells() * grid.directions();
     const MsTable<N> shape = detail::ms_table_shape(phase, alb, grid, opt);
-
-    using Medium = ContinuousMedium<Phase, S>;
-    const Medium medium(S(F(1)), albedo, phase);
-    const InfiniteMediumScene<Medium> scene{medium};
     MsTableHistograms out;
     out.first_block = block_begin;
     out.blocks.resize(std::size_t(block_end - block_begin));
-    const std::uint64_t per_block = (opt.photons + std::uint64_t(opt.blocks) - 1) / std::uint64_t(opt.blocks);
-    const std::int64_t n_blocks = std::int64_t(block_end - block_begin);
-#if defined(_OPENMP)
-#pragma omp parallel for schedule(dynamic, 1)
-#endif
-    for (std::int64_t k = 0; k < n_blocks; ++k) {
-        const std::uint64_t b = block_begin + std::uint64_t(k);
-        std::vector<double>& h = out.blocks[std::size_t(k)];
-        h.assign(n_all, 0.0);
-        const std::uint64_t p0 = std::min(opt.photons, b * per_block);
-        const std::uint64_t p1 = std::min(opt.photons, p0 + per_block);
-        detail::MsTableTally<N, F, S> tally{shape, h, opt.escape_radius * opt.escape_radius};
-        WalkOptions<F> wopt;
-        wopt.mode = TransportMode::importance;
-        wopt.rr_depth = 1 << 20;
-        for (std::uint64_t i = p0; i < p1; ++i) {
-            Rng rng = Rng::from_key(opt.seed, 0x4d5354ull, i);
-            const auto ps = phase.sample(Vec3<F>(F(0), F(0), F(1)), rng.template uniform2<F>());
-            if (!(ps.pdf > F(0))) continue;
-            PathState<F, S> st = start_path<F, S>(Ray<F>(Vec3<F>(F(0)), ps.w), 0, S(F(1)) * ps.weight);
-            (void)walk(scene, st, rng, tally, wopt);
-        }
-    }
+    detail::ms_table_trace_blocks(phase, albedo, opt, shape, block_begin, block_end, &out.blocks, nullptr, nullptr);
     return out;
 }
 
@@ -236,7 +449,6 @@ template <std::size_t N, class Phase>
 template <std::size_t N, class Phase>
 [[nodiscard]] MsTable<N> finish_ms_table(const Phase& phase, const Spectrum<N, typename Phase::Float>& albedo,
                                          const MsTableOptions& opt, const MsTableHistograms& hist) {
-    using F = typename Phase::Float;
     detail::check_ms_table_phase<N, Phase>();
     const MsTableGrid grid = detail::ms_table_grid(opt);
     const std::array<double, N> alb = detail::ms_table_albedo(albedo);
@@ -252,41 +464,74 @@ template <std::size_t N, class Phase>
     for (const auto& h : hist.blocks)
         for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += h[i];
 
-    // Phase matrix between direction bins, averaged over the mirror images (+phi, -phi).
-    std::vector<double> pm(n_dir * n_dir);
-    for (std::size_t i = 0; i < n_dir; ++i) {
-        const Vec3<double> wi = shape.bin_direction(i, false), wi2 = shape.bin_direction(i, true);
-        for (std::size_t j = 0; j < n_dir; ++j) {
-            const Vec3<double> wj = shape.bin_direction(j, false);
-            const auto a = phase.eval(Vec3<F>(wi), Vec3<F>(wj)).value[0];
-            const auto b = phase.eval(Vec3<F>(wi2), Vec3<F>(wj)).value[0];
-            pm[i * n_dir + j] = 0.5 * (double(a) + double(b));
-        }
-    }
-    std::vector<float> values(n_all, 0.0f);
-    const double dr = grid.rho_max / grid.n_rho, dz = (grid.z_max - grid.z_min) / grid.n_z;
-    for (std::size_t c = 0; c < N; ++c)
-        for (std::size_t iz = 0; iz < grid.n_z; ++iz)
-            for (std::size_t ir = 0; ir < grid.n_rho; ++ir) {
-                const double r0 = double(ir) * dr, r1 = r0 + dr;
-                const double vol = pi_v<double> * (r1 * r1 - r0 * r0) * dz;
-                const std::size_t base = shape.value_index(c, iz, ir, 0);
-                for (std::size_t j = 0; j < n_dir; ++j) {
-                    double acc = 0;
-                    for (std::size_t i = 0; i < n_dir; ++i) acc += sum[base + i] * pm[i * n_dir + j];
-                    values[base + j] = float(acc / (double(opt.photons) * vol));
-                }
-            }
+    std::vector<float> values = detail::ms_table_values(shape, detail::ms_table_phase_matrix(phase, shape), opt.photons,
+                                                        [&sum](std::size_t k) { return sum[k]; });
     return MsTable<N>(grid, alb, double(phase.mean_cosine()[0]), opt.photons, std::move(values));
 }
 
 /// Precompute the table with the walk kernel (every block of the build on this process's threads;
 /// build_ms_table_blocks + finish_ms_table split it over processes). `phase` is any PhaseFunction
 /// with Spectrum<N, F>; `albedo` per channel in [0, 1). Throws invalid_argument on bad options.
+/// opt.tally picks how the events are accumulated (MsTableTally); `info` (optional) receives
+/// the tally used, its memory, the events and squared weights per cell and the table's relative
+/// noise per channel.
 template <std::size_t N, class Phase>
 [[nodiscard]] MsTable<N> build_ms_table(const Phase& phase, const Spectrum<N, typename Phase::Float>& albedo,
-                                        const MsTableOptions& opt) {
-    return finish_ms_table(phase, albedo, opt, build_ms_table_blocks(phase, albedo, opt, 0, ms_table_blocks(opt)));
+                                        const MsTableOptions& opt, MsTableBuildInfo* info = nullptr) {
+    detail::check_ms_table_phase<N, Phase>();
+    const MsTableGrid grid = detail::ms_table_grid(opt);
+    const std::array<double, N> alb = detail::ms_table_albedo(albedo);
+    const std::size_t n_all = N * grid.cells() * grid.directions();
+    MsTableTally tally = opt.tally;
+    if (tally == MsTableTally::automatic)
+        tally = double(n_all) * sizeof(double) * double(opt.blocks) <= double(ms_table_block_budget) ? MsTableTally::per_block
+                                                                                                      : MsTableTally::shared;
+    detail::MsTableBlockStats stats;
+    detail::MsTableBlockStats* st = info ? &stats : nullptr;
+    MsTable<N> table;
+    if (tally == MsTableTally::per_block) {
+        MsTableHistograms hist;
+        hist.blocks.resize(std::size_t(opt.blocks));
+        const MsTable<N> shape = detail::ms_table_shape(phase, alb, grid, opt);
+        detail::ms_table_trace_blocks(phase, albedo, opt, shape, 0, std::uint64_t(opt.blocks), &hist.blocks, nullptr, st);
+        table = finish_ms_table(phase, albedo, opt, hist);
+        if (info) info->histogram_bytes = n_all * sizeof(double) * std::size_t(opt.blocks);
+    } else {
+        std::vector<std::uint64_t> shared(n_all, 0);
+        detail::ms_table_trace_blocks(phase, albedo, opt, detail::ms_table_shape(phase, alb, grid, opt), 0,
+                                      std::uint64_t(opt.blocks), nullptr, shared.data(), st);
+        const MsTable<N> shape = detail::ms_table_shape(phase, alb, grid, opt);
+        std::vector<float> values =
+            detail::ms_table_values(shape, detail::ms_table_phase_matrix(phase, shape), opt.photons,
+                                    [&shared](std::size_t k) { return double(shared[k]) / detail::ms_table_fixed_scale; });
+        shared = std::vector<std::uint64_t>();  // free the histogram before the table is checked
+        table = MsTable<N>(grid, alb, double(phase.mean_cosine()[0]), opt.photons, std::move(values));
+        if (info) info->histogram_bytes = n_all * sizeof(std::uint64_t);
+    }
+    if (info) {
+        info->tally = tally;
+        const std::size_t cells = grid.cells();
+        info->cell_events.assign(cells, 0);
+        info->cell_weight.assign(N * cells, 0.0);
+        info->cell_weight2.assign(N * cells, 0.0);
+        for (std::size_t b = 0; b < stats.events.size(); ++b) {  // block order: the same sums on any thread count
+            for (std::size_t i = 0; i < cells; ++i) info->cell_events[i] += stats.events[b][i];
+            for (std::size_t i = 0; i < N * cells; ++i) {
+                info->cell_weight[i] += stats.weight[b][i];
+                info->cell_weight2[i] += stats.weight2[b][i];
+            }
+        }
+        info->relative_noise.assign(N, 0.0);
+        for (std::size_t c = 0; c < N; ++c) {
+            double noise = 0, power = 0;
+            for (std::size_t i = 0; i < cells; ++i) {
+                noise += std::sqrt(info->cell_weight2[c * cells + i]);
+                power += info->cell_weight[c * cells + i];
+            }
+            info->relative_noise[c] = power > 0 ? noise / power : 0.0;
+        }
+    }
+    return table;
 }
 
 /// Save atomically in the shared container (kind "MSTB"). Throws io_error.
