@@ -40,6 +40,7 @@
 #include "grainlight/integrators/walk.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/phase/henyey_greenstein.hpp"
+#include "grainlight/core/serialization.hpp"
 #include "grainlight/precompute/ms_table.hpp"
 #include "grainlight/scene/camera.hpp"
 #include "grainlight/scene/image_io.hpp"
@@ -116,6 +117,8 @@ constexpr double kTableMerge = 0.05;
 struct Result {
     double seconds_table = 0, seconds_samples = 0, seconds_pb = 0, seconds_vpt = 0;
     double table_mb = 0, samples_mb = 0, table_qt_mb = 0, table_qt_lossy_mb = 0, table_qt_merged_mb = 0;
+    double table_qt_noise_mb = 0;
+    std::size_t table_qt_noise_lobes = 0;
     double pb_mean = 0, ref_mean = 0, ref_se = 0, rel = 0, rel_se = 0;
     double mse = 0, ref_var_mean = 0, e2 = 0, e2_se = 0, pb_noise = 0, var_ps = 0, half_ratio = 0;
     double speedup = 0, events_per_path = 0;
@@ -128,6 +131,26 @@ std::string table_key(const Material& m, const gl::MsTableOptions& to) {
     os << "wang18_ms_table_" << m.key << "_g" << m.g << "_" << to.n_rho << "x" << to.n_z << "x" << to.n_theta << "x"
        << to.n_phi  << "_r" << to.rho_max << "_e" << to.escape_radius << "_" << to.photons << "_s" << to.seed << ".bin";
     return os.str();
+}
+
+constexpr std::uint32_t kCellNoiseKind = gl::fourcc("MSNZ");
+
+void save_cell_noise(const std::filesystem::path& path, const std::vector<double>& v) {
+    gl::ByteWriter w;
+    w.put(std::uint64_t(v.size()));
+    w.put_array(v.data(), v.size());
+    gl::write_container_atomic(path, kCellNoiseKind, 1, w.bytes());
+}
+
+std::vector<double> load_cell_noise(const std::filesystem::path& path, std::size_t expect) {
+    const auto payload = gl::read_container(path, kCellNoiseKind, 1);
+    gl::ByteReader r(payload, "cell noise '" + path.string() + "'");
+    const auto n = r.get<std::uint64_t>();
+    if (n != expect) r.fail("holds " + std::to_string(n) + " values, expected " + std::to_string(expect));
+    std::vector<double> v;
+    r.get_array(v, n);
+    r.expect_end();
+    return v;
 }
 
 Result run_material(const gl_examples::Example& ex, const Material& mat, const Settings& st, std::uint64_t seed,
@@ -171,18 +194,28 @@ Result run_material(const gl_examples::Example& ex, const Material& mat, const S
     }
     double c0 = cpu_seconds();
     const auto table_path = out / table_key(mat, to);
+    // The cells' relative noise (MsTableBuildInfo) is cached beside the table.
+    auto noise_path = table_path;
+    noise_path += ".noise";
     gl::MsTable<3> table;
-    if (std::filesystem::exists(table_path)) {
+    std::vector<double> cell_noise;
+    if (std::filesystem::exists(table_path) && std::filesystem::exists(noise_path)) {
         try {
             table = gl::MsTable<3>::load(table_path);
+            cell_noise = load_cell_noise(noise_path, 3 * table.grid().cells());
             r.table_cached = true;
         } catch (const std::exception&) {
             r.table_cached = false;
         }
     }
     if (!r.table_cached) {
-        table = gl::MsTable<3>::build(Phase(mat.g), mat.albedo, to);
-        if (ex.root()) table.save(table_path);
+        gl::MsTableBuildInfo info;
+        table = gl::build_ms_table(Phase(mat.g), mat.albedo, to, &info);
+        cell_noise = gl::ms_table_cell_relative_noise(info);
+        if (ex.root()) {
+            table.save(table_path);
+            save_cell_noise(noise_path, cell_noise);
+        }
     }
     r.seconds_table = cpu_seconds() - c0;
     r.table_mb = double(table.bytes()) / 1e6;
@@ -193,6 +226,12 @@ Result run_material(const gl_examples::Example& ex, const Material& mat, const S
     // ... and merging blocks whose power-weighted L1 error is within 5 % (Sec. 5.2's density-driven
     // subdivision, with a bound; integrators/ms_table_quadtree.hpp).
     r.table_qt_merged_mb = double(gl::MsTableQuadtree<3>(table, 0.0, kTableMerge).bytes()) / 1e6;
+    // ... and merging blocks with no structure above the table's own noise (chi-square at 2 sigma).
+    {
+        const gl::MsTableQuadtree<3> qn(table, 0.0, kTableMerge, cell_noise);
+        r.table_qt_noise_mb = double(qn.bytes()) / 1e6;
+        r.table_qt_noise_lobes = qn.stored_lobes();
+    }
 
     // --- Point-based: light samples once, then pb_spp camera rays per pixel. ---
     gl::PointBasedOptions<float> po;
@@ -398,6 +437,58 @@ Result run_material(const gl_examples::Example& ex, const Material& mat, const S
     return r;
 }
 
+/// Sec. 5.2 / Table 2 at the paper's resolution: one material's table on the paper's grid
+/// (1024 x 512 (rho, z) cells, 18 x 36 directions: our azimuth is folded into [0, pi], so 18 x 18
+/// bins hold the paper's 36 over [0, 2 pi]) over the same +-10 mfp, built with the shared
+/// fixed-point tally, then compressed with the quadtree. Not cached (2 GB).
+struct PaperTable {
+    std::uint64_t photons = 0;
+    double seconds_build = 0, seconds_compress = 0, dense_mb = 0, histogram_mb = 0;
+    double qt_mb = 0, qt_lossy_mb = 0, qt_merged_mb = 0, qt_noise_mb = 0;
+    std::size_t stored_lobes = 0, merged_lobes = 0, merged_leaves = 0, noise_lobes = 0, noise_leaves = 0;
+    std::size_t cells_with_events = 0, cells = 0;
+    std::array<double, 3> relative_noise{};
+};
+
+PaperTable run_paper_table(const Material& mat, const gl::MsTableOptions& base, std::uint64_t photons) {
+    PaperTable r;
+    gl::MsTableOptions to = base;
+    to.n_rho = 1024;
+    to.n_z = 512;
+    to.n_theta = 18;
+    to.n_phi = 18;
+    to.photons = photons;
+    to.blocks = 16;
+    to.tally = gl::MsTableTally::automatic;  // 16 x 4 GB per block would not fit: the shared tally
+    r.photons = photons;
+    gl::MsTableBuildInfo info;
+    double c0 = cpu_seconds();
+    const gl::MsTable<3> table = gl::build_ms_table(Phase(mat.g), mat.albedo, to, &info);
+    r.seconds_build = cpu_seconds() - c0;
+    r.dense_mb = double(table.bytes()) / 1e6;
+    r.histogram_mb = double(info.histogram_bytes) / 1e6;
+    for (std::size_t c = 0; c < 3; ++c) r.relative_noise[c] = info.relative_noise[c];
+    r.cells = info.cell_events.size();
+    for (const auto n : info.cell_events) r.cells_with_events += n > 0;
+    c0 = cpu_seconds();
+    r.qt_mb = double(gl::MsTableQuadtree<3>(table, 0.0).bytes()) / 1e6;
+    r.qt_lossy_mb = double(gl::MsTableQuadtree<3>(table, 1e-4).bytes()) / 1e6;
+    {
+        const gl::MsTableQuadtree<3> q(table, 0.0, kTableMerge);
+        r.qt_merged_mb = double(q.bytes()) / 1e6;
+        r.merged_lobes = q.stored_lobes();
+        r.merged_leaves = q.merged_leaves();
+    }
+    {
+        const gl::MsTableQuadtree<3> q(table, 0.0, kTableMerge, gl::ms_table_cell_relative_noise(info));
+        r.qt_noise_mb = double(q.bytes()) / 1e6;
+        r.noise_lobes = q.stored_lobes();
+        r.noise_leaves = q.merged_leaves();
+    }
+    r.seconds_compress = cpu_seconds() - c0;
+    return r;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -419,6 +510,10 @@ int main(int argc, char** argv) {
             st.ms_image_offset = ex.opt<float>("ms-image-offset", 0.0f, "image plane offset in transport mean free paths");
             st.vpt_max_depth = ex.opt<int>("vpt-max-depth", 0, "cap the VPT paths at this many events (0: none; the paper's UPBP reference: 50)");
             st.table_range = ex.opt<float>("table-range", 10.0f, "MS table extent +-range in mean free paths (0: 5 diffusion lengths, at most the sphere)");
+            const std::string paper_table = ex.opt<std::string>(
+                "paper-table", "none", "wax",
+                "build this material's table on the paper's 1024 x 512 x 18 x 36 grid and compress it (none: skip; ~6 GB)");
+            const int paper_photons = ex.opt<int>("paper-table-photons", 200000, 2000000, "particles of the paper-resolution table");
             ex.checkpointable();
             ex.ready();
             if (st.pb_spp < 2 || st.pb_spp > 4096)
@@ -457,7 +552,7 @@ int main(int argc, char** argv) {
             if (run.empty()) throw gl_examples::cli_error("--materials: empty list");
 
             gl_examples::Csv csv({"material", "seconds_table", "seconds_samples", "seconds_pb", "seconds_vpt",
-                                  "memory_mb", "table_mb", "table_quadtree_mb", "table_quadtree_lossy_mb", "table_quadtree_merged_mb", "paper_table_mb", "mse", "e2", "e2_se", "pb_noise",
+                                  "memory_mb", "table_mb", "table_quadtree_mb", "table_quadtree_lossy_mb", "table_quadtree_merged_mb", "table_quadtree_noise_mb", "paper_table_mb", "mse", "e2", "e2_se", "pb_noise",
                                   "vpt_variance_per_sample", "speedup_equal_error", "paper_time_ratio", "paper_mse",
                                   "rel_diff_total", "rel_diff_total_stderr", "vpt_events_per_path"});
             gl_examples::Json jm;
@@ -482,14 +577,16 @@ int main(int argc, char** argv) {
                             r.e2, r.e2_se, r.mse, r.ref_var_mean, r.pb_noise, r.e2 - r.pb_noise, r.var_ps,
                             r.half_ratio, r.volume_samples, r.samples_mb, r.table_mb);
                 if (ex.root()) std::printf("         table: dense %.1f MB, quadtree over empty regions %.1f MB (lossless), %.1f MB "
-                            "(cells < 1e-4 of the peak dropped), %.2f MB (blocks merged within %.0f %% power-weighted L1)   "
+                            "(cells < 1e-4 of the peak dropped), %.2f MB (blocks merged within %.0f %% power-weighted L1), "
+                            "%.2f MB (%zu lobes; also blocks flat within the table's noise)   "
                             "[Table 2: %.1f MB compressed, 8.4 GB dense]\n",
                             r.table_mb, r.table_qt_mb, r.table_qt_lossy_mb, r.table_qt_merged_mb, 100 * kTableMerge,
-                            m->paper_table_mb);
+                            r.table_qt_noise_mb, r.table_qt_noise_lobes, m->paper_table_mb);
                 csv.row_text({m->key, std::to_string(r.seconds_table), std::to_string(r.seconds_samples),
                               std::to_string(r.seconds_pb), std::to_string(r.seconds_vpt), std::to_string(mem),
                               std::to_string(r.table_mb), std::to_string(r.table_qt_mb),
                               std::to_string(r.table_qt_lossy_mb), std::to_string(r.table_qt_merged_mb),
+                              std::to_string(r.table_qt_noise_mb),
                               std::to_string(m->paper_table_mb), std::to_string(r.mse),
                               std::to_string(r.e2), std::to_string(r.e2_se), std::to_string(r.pb_noise),
                               std::to_string(r.var_ps), std::to_string(r.speedup), std::to_string(m->paper_ratio()),
@@ -509,6 +606,8 @@ int main(int argc, char** argv) {
                     .num("table_quadtree_mb", r.table_qt_mb)
                     .num("table_quadtree_lossy_mb", r.table_qt_lossy_mb)
                     .num("table_quadtree_merged_mb", r.table_qt_merged_mb)
+                    .num("table_quadtree_noise_mb", r.table_qt_noise_mb)
+                    .integer("table_quadtree_noise_lobes", std::int64_t(r.table_qt_noise_lobes))
                     .num("mse", r.mse)
                     .num("error2", r.e2)
                     .num("error2_stderr", r.e2_se)
@@ -527,6 +626,48 @@ int main(int argc, char** argv) {
                 flat.push_back({std::string(m->key) + "_seconds_vpt", r.seconds_vpt});
                 flat.push_back({std::string(m->key) + "_memory_mb", mem});
             }
+            // The paper's grid for one material (Table 2's memory and Sec. 5.2's compression).
+            gl_examples::Json jp;
+            bool have_paper = false;
+            if (paper_table != "none") {
+                const Material* pm = nullptr;
+                for (const auto& x : kMaterials)
+                    if (paper_table == x.key) pm = &x;
+                if (!pm) throw gl_examples::cli_error("--paper-table: unknown material '" + paper_table + "' (oil, wax, milk, bmps, none)");
+                if (paper_photons < 1000) throw gl_examples::cli_error("--paper-table-photons must be >= 1000");
+                const PaperTable pt = run_paper_table(*pm, st.table, std::uint64_t(paper_photons));
+                have_paper = true;
+                if (ex.root())
+                    std::printf("\n  %s on the paper's grid (1024 x 512 cells x 18 x 36 directions, +-10 mfp, %llu particles): "
+                                "build %.1f CPU s (histogram %.0f MB, shared fixed-point tally), dense %.0f MB [paper: 8.4 GB]; "
+                                "%zu of %zu cells hold events; relative noise %.3f / %.3f / %.3f (R / G / B)\n"
+                                "  quadtree: %.0f MB lossless, %.0f MB (cells < 1e-4 of the peak dropped), %.1f MB merged "
+                                "within %.0f %% (%zu lobes), %.1f MB merged where flat within the noise (%zu lobes, %zu merged "
+                                "blocks); %.1f CPU s   [Table 2: %.1f MB, 8256 lobes, 50 M particles]\n",
+                                pm->name, (unsigned long long)pt.photons, pt.seconds_build, pt.histogram_mb, pt.dense_mb,
+                                pt.cells_with_events, pt.cells, pt.relative_noise[0], pt.relative_noise[1],
+                                pt.relative_noise[2], pt.qt_mb, pt.qt_lossy_mb, pt.qt_merged_mb, 100 * kTableMerge,
+                                pt.merged_lobes, pt.qt_noise_mb, pt.noise_lobes, pt.noise_leaves, pt.seconds_compress,
+                                pm->paper_table_mb);
+                jp.str("material", pm->key)
+                    .str("grid", "1024x512x18x36")
+                    .integer("photons", std::int64_t(pt.photons))
+                    .num("seconds_build", pt.seconds_build)
+                    .num("seconds_compress", pt.seconds_compress)
+                    .num("histogram_mb", pt.histogram_mb)
+                    .num("dense_mb", pt.dense_mb)
+                    .num("quadtree_mb", pt.qt_mb)
+                    .num("quadtree_lossy_mb", pt.qt_lossy_mb)
+                    .num("quadtree_merged_mb", pt.qt_merged_mb)
+                    .integer("quadtree_merged_lobes", std::int64_t(pt.merged_lobes))
+                    .num("quadtree_noise_mb", pt.qt_noise_mb)
+                    .integer("quadtree_noise_lobes", std::int64_t(pt.noise_lobes))
+                    .integer("cells_with_events", std::int64_t(pt.cells_with_events))
+                    .num("relative_noise_green", pt.relative_noise[1])
+                    .num("paper_dense_mb", 8400.0)
+                    .num("paper_table_mb", pm->paper_table_mb)
+                    .integer("paper_lobes", 8256);
+            }
             if (!ex.root()) return ex.finish({});  // rank 0 writes and prints
             const auto csv_path = ex.csv("wang18_table3_materials.csv", csv);
             ex.plot("wang18_table3_materials", csv_path, ex.out() / "wang18_table3_materials.png");
@@ -534,6 +675,7 @@ int main(int argc, char** argv) {
             wang18::put_rank_rows(ex, j, st.W);
             j.integer("pb_spp", st.pb_spp).integer("vpt_spp", st.vpt_spp).integer("width", st.W);
             j.raw("materials", jm.str());
+            if (have_paper) j.raw("paper_table", jp.str());
             for (const auto& [k, v] : flat) j.num(k, v);
             return ex.finish(j);
         });

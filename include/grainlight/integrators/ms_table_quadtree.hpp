@@ -17,12 +17,27 @@
 ///   - or is a single cell: a full leaf with its N x n_theta x n_phi lobe values.
 /// merge_tolerance = 0 (the default) merges nothing, and with tolerance = 0 every value read back
 /// equals the dense table's.
+///
+/// Noise-aware merging (optional): given each cell's relative noise r_k (per channel, the
+/// relative standard error of the cell's tallied power; precompute/ms_table.hpp's
+/// ms_table_cell_relative_noise), a block is also merged when its cells' powers
+/// T_k = vol_k sum_j dOmega_j v_k,j do not differ from a constant density beyond their noise: with
+/// the block's mean density d = sum T_k / sum vol_k, T^_k = d vol_k and
+/// var_k = max((r_k T_k)^2, w T^_k) (w = sum (r_k T_k)^2 / sum T_k, the block's mean weight of
+/// one effective particle: a Poisson floor for cells with few or no events),
+///     chi^2 = sum_k (T_k - T^_k)^2 / var_k  <=  dof + noise_factor sqrt(2 dof),  dof = cells - 1,
+/// in every channel. A block passing it has no structure its noise can resolve, so its mean lobe
+/// is as close to the true table as its cells were (closer: averaging removes noise) while
+/// storing one lobe. Its error against the dense table is not bounded by merge_tolerance: it is
+/// the noise that merging removed. This is what lets a finely gridded table built from few
+/// particles (the paper's 1024 x 512 grid) compress by orders of magnitude.
 #pragma once
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "grainlight/core/error.hpp"
@@ -39,14 +54,34 @@ public:
     /// file comment) are merged into one lobe. Both 0: lossless.
     /// Throws invalid_argument for a tolerance outside [0, 1) or an empty table.
     explicit MsTableQuadtree(const MsTable<N>& t, double tolerance = 0.0, double merge_tolerance = 0.0)
+        : MsTableQuadtree(t, tolerance, merge_tolerance, {}, 0.0) {}
+    /// As above, and also merge blocks whose cells' powers agree with a constant density within
+    /// their noise: a chi-square test passed at `noise_factor` standard deviations of the
+    /// chi-square (see the file comment; 0 turns it off); `cell_relative_noise` has one value per
+    /// channel and cell, index c n_z n_rho + iz n_rho + ir (ms_table_cell_relative_noise).
+    /// Throws invalid_argument for a tolerance outside [0, 1), a noise factor outside [0, 100], a
+    /// noise array of the wrong size or with a negative / non-finite value, or an empty table.
+    MsTableQuadtree(const MsTable<N>& t, double tolerance, double merge_tolerance,
+                    std::span<const double> cell_relative_noise, double noise_factor = 2.0)
         : grid_(t.grid()), albedo_(t.albedos()), g_(t.mean_cosine()), photons_(t.photons()) {
         check_argument(tolerance >= 0.0 && tolerance < 1.0, "MsTableQuadtree", "tolerance", tolerance, "[0, 1)");
         check_argument(merge_tolerance >= 0.0 && merge_tolerance < 1.0, "MsTableQuadtree", "merge_tolerance",
                        merge_tolerance, "[0, 1)");
         check_argument(!t.empty(), "MsTableQuadtree", "table size", t.size(), ">= 1");
+        check_argument(noise_factor >= 0.0 && noise_factor <= 100.0, "MsTableQuadtree", "noise_factor", noise_factor,
+                       "[0, 100]");
+        if (!cell_relative_noise.empty()) {
+            check_argument(cell_relative_noise.size() == N * t.grid().cells(), "MsTableQuadtree",
+                           "cell_relative_noise.size()", cell_relative_noise.size(), "channels * n_z * n_rho");
+            for (const double r : cell_relative_noise)
+                check_argument(std::isfinite(r) && r >= 0.0, "MsTableQuadtree", "cell relative noise", r, "[0, inf)");
+            noise_ = cell_relative_noise;
+            noise_factor_ = noise_factor;
+            tk_.resize(t.grid().cells());
+        }
         nd_ = grid_.directions();
         merge_tolerance_ = merge_tolerance;
-        if (merge_tolerance > 0.0) {
+        if (merge_tolerance > 0.0 || noise_factor_ > 0.0) {
             // Cell volumes (by rho ring) and bin solid angles as in MsTable::total.
             vol_.resize(grid_.n_rho);
             for (std::size_t ir = 0; ir < grid_.n_rho; ++ir) vol_[ir] = ms_cell_volume(grid_, ir);
@@ -73,6 +108,8 @@ public:
             }
         nodes_.push_back(Node{});
         nodes_[0] = build(t, full, 0, 0, side_);
+        noise_ = {};  // the caller's array is not kept
+        tk_ = {};
     }
 
     /// The stored value of channel c, cell (iz, ir), direction bin j; 0 in a dropped region.
@@ -172,8 +209,10 @@ private:
                 }
             }
         for (double& m : mean_) m /= vb;
+        if (noise_factor_ > 0.0 && flat_within_noise(t, z0, z1, r0, r1, vb)) return true;
         for (std::size_t c = 0; c < N; ++c) {
             const double budget = budget_per_volume_[c] * vb;
+            if (!(budget > 0.0)) return false;
             const double* m = mean_.data() + c * nd_;
             double err = 0;
             for (std::uint32_t iz = z0; iz < z1; ++iz)
@@ -183,6 +222,42 @@ private:
                     for (std::size_t j = 0; j < nd_; ++j) e += dom_[j] * std::abs(double(v[j]) - m[j]);
                     err += vol_[ir] * e;
                     if (err > budget) return false;
+                }
+        }
+        return true;
+    }
+    // The noise-aware test of the file comment over the in-grid cells [z0, z1) x [r0, r1) of
+    // volume vb, every channel.
+    bool flat_within_noise(const MsTable<N>& t, std::uint32_t z0, std::uint32_t z1, std::uint32_t r0, std::uint32_t r1,
+                           double vb) {
+        const std::size_t cells = grid_.cells();
+        const double n = double(z1 - z0) * double(r1 - r0);
+        if (n < 2) return false;
+        const double dof = n - 1.0, limit = dof + noise_factor_ * std::sqrt(2.0 * dof);
+        for (std::size_t c = 0; c < N; ++c) {
+            double sum_t = 0, sum_var = 0;
+            for (std::uint32_t iz = z0; iz < z1; ++iz)
+                for (std::uint32_t ir = r0; ir < r1; ++ir) {
+                    const float* v = t.values().data() + t.value_index(c, iz, ir, 0);
+                    double l1 = 0;
+                    for (std::size_t j = 0; j < nd_; ++j) l1 += dom_[j] * double(v[j]);
+                    const double tk = vol_[ir] * l1, r = noise_[c * cells + std::size_t(iz) * grid_.n_rho + ir];
+                    tk_[std::size_t(iz - z0) * (r1 - r0) + (ir - r0)] = tk;
+                    sum_t += tk;
+                    sum_var += (r * tk) * (r * tk);
+                }
+            if (!(sum_t > 0.0)) continue;  // an all-zero channel is flat
+            const double d = sum_t / vb, w = sum_var / sum_t;
+            if (!(w > 0.0)) return false;  // power without a noise estimate: keep the detail
+            double chi2 = 0;
+            for (std::uint32_t iz = z0; iz < z1; ++iz)
+                for (std::uint32_t ir = r0; ir < r1; ++ir) {
+                    const double tk = tk_[std::size_t(iz - z0) * (r1 - r0) + (ir - r0)];
+                    const double r = noise_[c * cells + std::size_t(iz) * grid_.n_rho + ir];
+                    const double expect = d * vol_[ir];
+                    const double var = std::max((r * tk) * (r * tk), w * expect);
+                    chi2 += (tk - expect) * (tk - expect) / var;
+                    if (chi2 > limit) return false;
                 }
         }
         return true;
@@ -204,7 +279,7 @@ private:
             ++covered_cells_;
             return leaf;
         }
-        if (merge_tolerance_ > 0.0 && mergeable(t, z0, r0, s)) {
+        if ((merge_tolerance_ > 0.0 || noise_factor_ > 0.0) && mergeable(t, z0, r0, s)) {
             const Node leaf{kLeaf, std::uint32_t(data_.size())};
             for (double m : mean_) data_.push_back(float(m));
             covered_cells_ += std::size_t(z1 - z0) * (r1 - r0);
@@ -228,6 +303,9 @@ private:
     float threshold_ = 0.0f;
     std::uint32_t side_ = 1;
     double merge_tolerance_ = 0;
+    std::span<const double> noise_;  // per channel and cell: relative noise (noise-aware merging; only during construction)
+    double noise_factor_ = 0;        // standard deviations of the chi-square allowed (0: off)
+    std::vector<double> tk_;         // scratch: the block's cell powers
     std::array<double, N> budget_per_volume_{};
     std::vector<double> vol_, dom_, mean_;  // cell volume by rho ring, bin solid angle, scratch lobe
     std::size_t covered_cells_ = 0, merged_leaves_ = 0;

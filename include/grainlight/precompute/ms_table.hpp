@@ -92,6 +92,18 @@ struct MsTableBuildInfo {
     std::vector<double> relative_noise;
 };
 
+/// Per channel and (z, rho) cell (index c n_z n_rho + iz n_rho + ir): the relative standard
+/// error of the cell's tallied power, sqrt(cell_weight2) / cell_weight (0 in cells without
+/// events), the input of MsTableQuadtree's noise-aware merging.
+[[nodiscard]] inline std::vector<double> ms_table_cell_relative_noise(const MsTableBuildInfo& info) {
+    check_argument(info.cell_weight.size() == info.cell_weight2.size(), "ms_table_cell_relative_noise",
+                   "cell_weight2.size()", info.cell_weight2.size(), "cell_weight.size()");
+    std::vector<double> r(info.cell_weight.size(), 0.0);
+    for (std::size_t i = 0; i < r.size(); ++i)
+        if (info.cell_weight[i] > 0.0) r[i] = std::sqrt(info.cell_weight2[i]) / info.cell_weight[i];
+    return r;
+}
+
 /// Options of the table precomputation.
 struct MsTableOptions {
     int n_rho = 32;             ///< radial cells (paper: 1024)
