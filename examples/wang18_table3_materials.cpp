@@ -31,6 +31,7 @@
 #include <span>
 #include <sstream>
 #include <string>
+#include <optional>
 #include <vector>
 
 #include "common/harness.hpp"
@@ -107,6 +108,7 @@ struct Settings {
     bool ms_image = false;   ///< boundary image of the multiple term (PointBasedOptions::ms_boundary_image)
     float ms_image_offset = 0;  ///< its offset in transport mean free paths
     int vpt_max_depth = 0;   ///< VPT path cap in events (0: none; the paper's UPBP: 50)
+    std::string table_read = "dense";  ///< the table the renderer reads: dense, merged (5 %), noise
     float eps1 = 1.0f, R_opt = 20.0f;
     gl::MsTableOptions table;
 };
@@ -227,11 +229,15 @@ Result run_material(const gl_examples::Example& ex, const Material& mat, const S
     // subdivision, with a bound; integrators/ms_table_quadtree.hpp).
     r.table_qt_merged_mb = double(gl::MsTableQuadtree<3>(table, 0.0, kTableMerge).bytes()) / 1e6;
     // ... and merging blocks with no structure above the table's own noise (chi-square at 2 sigma).
+    // The renderer reads the dense table, or (--table-read) one of these compressed copies.
+    std::optional<gl::MsTableQuadtree<3>> read_q;
     {
-        const gl::MsTableQuadtree<3> qn(table, 0.0, kTableMerge, cell_noise);
+        gl::MsTableQuadtree<3> qn(table, 0.0, kTableMerge, cell_noise);
         r.table_qt_noise_mb = double(qn.bytes()) / 1e6;
         r.table_qt_noise_lobes = qn.stored_lobes();
+        if (st.table_read == "noise") read_q.emplace(std::move(qn));
     }
+    if (st.table_read == "merged") read_q.emplace(table, 0.0, kTableMerge);
 
     // --- Point-based: light samples once, then pb_spp camera rays per pixel. ---
     gl::PointBasedOptions<float> po;
@@ -251,9 +257,10 @@ Result run_material(const gl_examples::Example& ex, const Material& mat, const S
     po.ms_image_offset = st.ms_image_offset;
     c0 = cpu_seconds();
     gl::Rng lrng = gl::Rng::from_key(seed, 0x5742u);
-    const Renderer pb(medium, eta, sphere, gl::sphere_surface_samples(sphere, st.surface),
-                      gl::Light<float, gl::RGB>::quad_light(quad, gl::RGB(Le)), po, lrng, &table,
-                      gl::sphere_surface_samples(sphere, po.bounce_samples));
+    Renderer pb(medium, eta, sphere, gl::sphere_surface_samples(sphere, st.surface),
+                gl::Light<float, gl::RGB>::quad_light(quad, gl::RGB(Le)), po, lrng, &table,
+                gl::sphere_surface_samples(sphere, po.bounce_samples));
+    if (read_q) pb.use_compressed_table(&*read_q);  // the bounce samples keep the dense table's light
     r.seconds_samples = cpu_seconds() - c0;
     r.volume_samples = pb.volume_sample_count();
     r.samples_mb = double(pb.bytes()) / 1e6;
@@ -510,6 +517,9 @@ int main(int argc, char** argv) {
             st.ms_image_offset = ex.opt<float>("ms-image-offset", 0.0f, "image plane offset in transport mean free paths");
             st.vpt_max_depth = ex.opt<int>("vpt-max-depth", 0, "cap the VPT paths at this many events (0: none; the paper's UPBP reference: 50)");
             st.table_range = ex.opt<float>("table-range", 10.0f, "MS table extent +-range in mean free paths (0: 5 diffusion lengths, at most the sphere)");
+            st.table_read = ex.opt<std::string>(
+                "table-read", "dense",
+                "table the renderer reads: dense, merged (quadtree merged within 5 %), noise (also merged within its noise)");
             const std::string paper_table = ex.opt<std::string>(
                 "paper-table", "none", "wax",
                 "build this material's table on the paper's 1024 x 512 x 18 x 36 grid and compress it (none: skip; ~6 GB)");
@@ -527,6 +537,8 @@ int main(int argc, char** argv) {
             if (!(st.table_range >= 0 && st.table_range <= 200))
                 throw gl_examples::cli_error("--table-range must be in [0, 200] (0: automatic)");
             if (photons < 1000) throw gl_examples::cli_error("--table-photons must be >= 1000");
+            if (st.table_read != "dense" && st.table_read != "merged" && st.table_read != "noise")
+                throw gl_examples::cli_error("--table-read must be dense, merged or noise, got '" + st.table_read + "'");
             const bool full = ex.full();
             st.table.n_rho = full ? 96 : 48;
             st.table.n_z = full ? 192 : 96;
