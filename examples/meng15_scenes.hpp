@@ -190,13 +190,16 @@ inline Json& rank_rows(Json& j, const Example& ex, int height) {
 struct Composite {
     std::vector<gl::HybridImages> panels;
     double mean = 0, mean_se = 0;  ///< channel-mean radiance of the whole image and its standard error
-    double var_total = 0, var_total_se = 0, var_high = 0;  ///< mean pixel variance of one bundle sample
-    double seconds_per_spp = 0, high_seconds_per_spp = 0;  ///< thread CPU seconds of a 1-spp image (all panels)
+    double var_total = 0, var_total_se = 0, var_high = 0, var_low = 0;  ///< mean pixel variance of one bundle sample
+    double seconds_per_spp = 0, high_seconds_per_spp = 0, low_seconds_per_spp = 0;  ///< thread CPU seconds of a 1-spp image (all panels)
     double paths = 0, switched = 0, switch_depth = 0, da = 0;  ///< counters summed over panels
     int spp = 0;
     [[nodiscard]] double ttuv() const { return var_total * seconds_per_spp; }
     [[nodiscard]] double ttuv_se() const { return var_total_se * seconds_per_spp; }
     [[nodiscard]] double ttuv_high() const { return var_high * high_seconds_per_spp; }
+    /// ttuv of the low-order (EPT) part alone: the technique's ttuv if what follows the switch
+    /// cost no time and added no variance (its best possible speed-up is ttuv(EPT) / this).
+    [[nodiscard]] double ttuv_low() const { return var_low * low_seconds_per_spp; }
     [[nodiscard]] double cpu() const { return seconds_per_spp * spp; }
     /// The panels' images side by side (`which`: combined, ept, vpt, da, switch depth).
     enum class Part { combined, ept, vpt, da, switch_depth };
@@ -233,8 +236,10 @@ inline Composite compose(std::vector<gl::HybridImages> panels) {
         c.var_total += p.var_total / K;
         se2 += p.var_total_se * p.var_total_se;
         c.var_high += p.var_high / K;
+        c.var_low += p.var_low / K;
         c.seconds_per_spp += p.seconds_per_spp();
         c.high_seconds_per_spp += p.spp > 0 ? p.cpu_seconds_high / double(p.spp) : 0.0;
+        c.low_seconds_per_spp += p.spp > 0 ? p.cpu_seconds_low / double(p.spp) : 0.0;
         c.paths += double(p.counters.paths);
         c.switched += double(p.counters.switched) + double(p.counters.rejected);
         c.switch_depth += double(p.counters.switch_depth);
