@@ -461,6 +461,21 @@ TEST_CASE("P_a that never loses: robust preview moments and the resolved-gain ru
         REQUIRE(a.gain - 2 * a.gain_se <= 1.0);
         REQUIRE(a.P_a_safe == 1.0);
     }
+    SECTION("a resolved gain below the minimum worth a render keeps P_a = 1") {
+        // V - M = 1, M = 0.6, t_L = 1, t_H = 2: predicted gain 1.09 (Eq. 8 P_a = 0.548), resolved
+        // on a quiet preview (scatter 0.05) but below kAcceptanceMinGain = 1.1; with min_gain 1
+        // it is taken.
+        const HybridImages pv = preview(20, 20, 1.0, 0.6, 0.05, 5);
+        AcceptanceEstimate a;
+        robust_acceptance(pv, 1.0, 2.0, a);
+        INFO("robust " << a.P_a_robust << " gain " << a.gain << " +- " << a.gain_se);
+        REQUIRE(a.gain - 2 * a.gain_se > 1.0);
+        REQUIRE(a.gain < kAcceptanceMinGain);
+        REQUIRE(a.P_a_safe == 1.0);
+        robust_acceptance(pv, 1.0, 2.0, a, 1.0 / 64.0, 1.0);
+        REQUIRE(a.P_a_safe == a.P_a_robust);
+        REQUIRE(a.P_a_safe < 0.9);
+    }
     SECTION("too few pixels or no cost: 1") {
         const HybridImages pv = preview(2, 1, 4.0, 1.0, 0.1, 4);
         AcceptanceEstimate a;

@@ -1033,7 +1033,8 @@ struct AcceptanceEstimate {
     /// covariance; this one does not.
     double P_a_moments = 1;
     /// The acceptance that never loses (what render drivers should use; docs/meng15_hybrid.md):
-    /// P_a_robust below when its predicted gain is resolved, i.e. gain - 2 gain_se > 1, else 1.
+    /// P_a_robust below when its predicted gain is resolved and worth a render of its own, i.e.
+    /// gain - 2 gain_se > min_gain (robust_acceptance; default 1.1), else 1.
     double P_a_safe = 1;
     /// Eq. 8, moments form, on robust preview moments: the preview pixels are split into 8
     /// interleaved groups and V, E[H^2] are the means of the group means without the largest
@@ -1045,11 +1046,19 @@ struct AcceptanceEstimate {
     double M_robust = 0;   ///< robust E[H^2] of one sample (P_a_robust = Eq. 8 with V_L = V - M, V_H = M)
 };
 
+/// Smallest predicted ttuv gain (after subtracting two of its standard errors) for which
+/// P_a_safe leaves P_a = 1. The jackknife error covers the preview's pixel noise, not the model:
+/// the two parts' CPU times come from the preview, and two renders of the same image differ in
+/// CPU time by up to ~10 % on a shared machine (meng15_table2_ttuv on the sandcastle at full:
+/// predicted gains 1.02-1.03 measured as 0.90-1.20). A gain below that is not worth a render.
+inline constexpr double kAcceptanceMinGain = 1.1;
+
 /// The robust and the safe acceptance (AcceptanceEstimate::P_a_robust, P_a_safe, gain,
 /// gain_se) from a preview rendered at P_a = 1 (its per-pixel variances) and the per-sample
-/// costs t_L, t_H of its two parts. Fills those four fields of `a`.
+/// costs t_L, t_H of its two parts. Fills those four fields of `a`. `min_gain`: P_a_safe is
+/// P_a_robust only if gain - 2 gain_se > min_gain (>= 1).
 inline void robust_acceptance(const HybridImages& pv, double t_L, double t_H, AcceptanceEstimate& a,
-                              double p_min = 1.0 / 64.0) {
+                              double p_min = 1.0 / 64.0, double min_gain = kAcceptanceMinGain) {
     constexpr int G = 8;
     const int w = pv.pixel_variance.width, h = pv.pixel_variance.height;
     std::array<double, G> V{}, M{}, n{};
@@ -1113,7 +1122,7 @@ inline void robust_acceptance(const HybridImages& pv, double t_L, double t_H, Ac
     double ss = 0;
     for (int g = 0; g < groups; ++g) ss += (gj[std::size_t(g)] - gm) * (gj[std::size_t(g)] - gm);
     a.gain_se = std::sqrt(double(groups - 1) / double(groups) * ss);
-    a.P_a_safe = a.gain - 2.0 * a.gain_se > 1.0 ? a.P_a_robust : 1.0;
+    a.P_a_safe = a.gain - 2.0 * a.gain_se > std::max(1.0, min_gain) ? a.P_a_robust : 1.0;
 }
 
 /// Estimate the optimal acceptance probability (Eq. 8) from a preview render of every
