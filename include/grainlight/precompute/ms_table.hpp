@@ -426,6 +426,7 @@ void ms_table_trace_blocks(const Phase& phase, const Spectrum<N, typename Phase:
             tally.weight = stats->weight[std::size_t(k)].data();
             tally.weight2 = stats->weight2[std::size_t(k)].data();
             tally.particle_sum.assign(N * cells, 0.0);
+            tally.touched.reserve(cells);  // a particle touches each cell once at most: no allocation in the walk
         }
         tally.escape2 = opt.escape_radius * opt.escape_radius;
         const std::uint64_t p0 = std::min(opt.photons, b * per_block);
