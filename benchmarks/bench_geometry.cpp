@@ -1,6 +1,8 @@
 // Benchmarks of the geometry layer: BVH closest-hit and any-hit ray-triangle throughput on
-// procedural grain meshes (items = rays), BVH build, analytic ray-sphere.
+// procedural grain meshes (items = rays), BVH build, analytic ray-sphere, and the cone walk of
+// star-shaped grains (geometry/star_mesh.hpp) against the BVH on the same rays.
 //   bench_geometry --benchmark_filter=Bvh
+//   bench_geometry --benchmark_filter=GrainQuery
 #include <benchmark/benchmark.h>
 
 #include <map>
@@ -63,6 +65,66 @@ static void BM_BvhAnyHit(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_BvhAnyHit)->Arg(5);
+
+namespace {
+// Rays of a path at a snow grain (unit bounding sphere): entering from the bounding sphere toward
+// a random point of the ball (`inside` false), or leaving from just inside its surface in a random
+// inward-hemisphere direction (`inside` true: the internal bounces of EPT).
+RaySet grain_rays(const Bvh<float>& bvh, bool inside, std::size_t n) {
+    RaySet r;
+    Pcg32 rng = Pcg32::from_key(inside ? 8 : 7);
+    while (r.o.size() < n) {
+        Vec3f o = sample_uniform_sphere(rng.uniform2<float>());
+        Vec3f d = glm::normalize(std::cbrt(rng.uniform<float>()) * sample_uniform_sphere(rng.uniform2<float>()) - o);
+        if (inside) {
+            const auto h = bvh.intersect(o, d, 0.0f, 3.0f);
+            if (!h.valid()) continue;
+            o = o + (h.t + 1e-4f) * d;
+            d = sample_uniform_sphere(rng.uniform2<float>());
+            if (glm::dot(d, h.n_geom) > 0.0f) d = -d;
+        }
+        r.o.push_back(o);
+        r.d.push_back(d);
+    }
+    return r;
+}
+}  // namespace
+
+// One snow grain's closest hit, args: icosphere level, method (0: the BVH alone, the baseline;
+// 1: the cone walk with Grain's budget, finished by the BVH, as Grain::intersect does), rays (0:
+// entering, 1: from inside). Same rays and same hits for both methods.
+static void BM_GrainQuery(benchmark::State& state) {
+    const int level = int(state.range(0));
+    const bool walk = state.range(1) == 1, inside = state.range(2) == 1;
+    const auto mesh = make_grain_mesh<float>(GrainShape::snow, 1.0f, 1, level);
+    const Bvh<float> bvh(mesh);
+    const auto star = StarMesh::build(mesh);
+    if (!star) {
+        state.SkipWithError("not star-shaped");
+        return;
+    }
+    const RaySet rays = grain_rays(bvh, inside, 4096);
+    std::size_t i = 0, hits = 0;
+    for (auto _ : state) {
+        TriangleHit<float> h;
+        if (walk) {
+            float t_resume = 0.0f;
+            if (!star->intersect(rays.o[i], rays.d[i], 10.0f, h, t_resume, Grain::star_walk_budget)) {
+                const auto hb = bvh.intersect(rays.o[i], rays.d[i], t_resume, h.valid() ? h.t : 10.0f);
+                if (hb.valid()) h = hb;
+            }
+        } else {
+            h = bvh.intersect(rays.o[i], rays.d[i], 0.0f, 10.0f);
+        }
+        hits += h.valid();
+        benchmark::DoNotOptimize(h.t);
+        i = (i + 1) & 4095;
+    }
+    state.counters["triangles"] = double(mesh.triangle_count());
+    state.counters["hit_rate"] = double(hits) / double(state.iterations());
+    state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_GrainQuery)->ArgsProduct({{1, 2, 3, 4}, {0, 1}, {0, 1}});
 
 // Build time; items = triangles.
 static void BM_BvhBuild(benchmark::State& state) {

@@ -11,6 +11,7 @@
 #include "grainlight/geometry/grains.hpp"
 #include "grainlight/geometry/procedural_boundaries.hpp"
 #include "grainlight/geometry/sphere.hpp"
+#include "grainlight/geometry/star_mesh.hpp"
 #include "grainlight/geometry/transform.hpp"
 #include "grainlight/geometry/triangle_mesh.hpp"
 #include "grainlight/geometry/voxelized_boundary.hpp"

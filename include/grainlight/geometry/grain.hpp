@@ -19,6 +19,7 @@
 #include "grainlight/geometry/bvh.hpp"
 #include "grainlight/geometry/grains.hpp"
 #include "grainlight/geometry/sphere.hpp"
+#include "grainlight/geometry/star_mesh.hpp"
 
 namespace grainlight {
 
@@ -42,6 +43,10 @@ public:
         material.validate();
         Grain g;
         g.bvh_ = std::make_shared<const Bvh<float>>(m);
+        // A mesh star-shaped around the origin (every procedural grain) is also walked cone by
+        // cone (geometry/star_mesh.hpp); up to star_walk_max_triangles, where that is faster.
+        if (m.triangle_count() <= star_walk_max_triangles)
+            if (auto star = StarMesh::build(m)) g.star_ = std::make_shared<const StarMesh>(std::move(*star));
         g.radius_ = r;
         g.material_ = material;
         g.triangles_ = m.triangle_count();
@@ -62,6 +67,15 @@ public:
 
     /// The grain's material.
     [[nodiscard]] const GrainMaterial& material() const noexcept { return material_; }
+    /// Meshes of at most this many triangles that are star-shaped around the origin are queried by
+    /// the cone walk of geometry/star_mesh.hpp first (the BVH finishes rays the walk hands over);
+    /// larger ones by the BVH alone. Procedural grains of icosphere level <= 3 (1280 triangles).
+    static constexpr std::size_t star_walk_max_triangles = 1280;
+    /// Cones the walk visits before it hands a ray to the BVH.
+    static constexpr int star_walk_budget = 8;
+
+    /// True if the mesh is queried by the cone walk (star-shaped, small enough).
+    [[nodiscard]] bool uses_star_walk() const noexcept { return bool(star_); }
     /// True for the analytic sphere, false for a mesh.
     [[nodiscard]] bool is_analytic_sphere() const noexcept { return !bvh_; }
     /// Radius of the grain's own (origin-centred) bounding sphere (the sphere's radius).
@@ -72,7 +86,8 @@ public:
     [[nodiscard]] std::size_t memory_bytes() const noexcept {
         if (!bvh_) return 0;
         return bvh_->nodes().size() * sizeof(BvhNode<float>) +
-               triangles_ * (sizeof(std::array<Vec3f, 3>) + sizeof(Vec3f) + sizeof(std::uint32_t));
+               triangles_ * (sizeof(std::array<Vec3f, 3>) + sizeof(Vec3f) + sizeof(std::uint32_t)) +
+               (star_ ? star_->memory_bytes() : 0);
     }
 
     /// Closest hit along o + t d (unit frame, d unit), t in (t_min, t_max): t and the outward unit
@@ -85,7 +100,15 @@ public:
             return true;
         }
         const Vec3d o2 = o + t_min * d;  // float BVH: start at t_min to keep the offset small
-        const auto h = bvh_->intersect(Vec3f(o2), Vec3f(d), 0.0f, float(std::min(t_max - t_min, 1e30)));
+        const Vec3f of(o2), df(d);
+        const float tm = float(std::min(t_max - t_min, 1e30));
+        TriangleHit<float> h;
+        float t_resume = 0.0f;
+        if (!star_ || !star_->intersect(of, df, tm, h, t_resume, star_walk_budget)) {
+            // No walk, or the rest of the ray after the cones the walk covered: the BVH.
+            const auto hb = bvh_->intersect(of, df, t_resume, h.valid() ? h.t : tm);
+            if (hb.valid()) h = hb;
+        }
         if (!h.valid()) return false;
         t = t_min + double(h.t);
         n = Vec3d(h.n_geom);
@@ -109,6 +132,7 @@ public:
 private:
     Grain() = default;
     std::shared_ptr<const Bvh<float>> bvh_;
+    std::shared_ptr<const StarMesh> star_;
     double radius_ = 1.0;
     std::size_t triangles_ = 0;
     GrainMaterial material_{};
