@@ -18,6 +18,10 @@ CXX=${GRAINLIGHT_FUZZ_CXX:-clang++-14}
 FLAGS=(-std=c++20 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all
        -I"$ROOT/include" -I"$ROOT/tests" -isystem /usr/include/eigen3)
 mkdir -p "$OUT"
+LAUNCH=()
+if command -v ccache >/dev/null 2>&1 && [ "${GRAINLIGHT_CCACHE:-ON}" != OFF ]; then
+  LAUNCH=(env CCACHE_BASEDIR="$ROOT" CCACHE_NOHASHDIR=true ccache)
+fi
 if [ $# -gt 0 ]; then
   targets=("$@")
 else
@@ -30,7 +34,9 @@ pids=()
 for t in "${targets[@]}"; do
   # Rebuild only when the target or a header changed (make-like check on mtimes).
   if [ ! -x "$OUT/$t" ] || [ -n "$(find "$ROOT/tests/fuzz" "$ROOT/include" -newer "$OUT/$t" -name '*.?pp' -print -quit)" ]; then
-    "$CXX" "${FLAGS[@]}" "$ROOT/tests/fuzz/$t.cpp" -o "$OUT/$t" &
+    # Compile (through ccache when installed, as the CMake builds do), then link.
+    ( "${LAUNCH[@]}" "$CXX" "${FLAGS[@]}" -c "$ROOT/tests/fuzz/$t.cpp" -o "$OUT/$t.o" &&
+      "$CXX" "${FLAGS[@]}" "$OUT/$t.o" -o "$OUT/$t" ) &
     pids+=($!)
     if [ ${#pids[@]} -ge "$JOBS" ]; then wait "${pids[0]}"; pids=("${pids[@]:1}"); fi
   fi

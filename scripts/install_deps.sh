@@ -16,13 +16,15 @@ PACKAGES=(
 )
 # Optional: the Python module (pybind11 + numpy, tested with pytest), the Embree adapter, MPI
 # scale-out of the examples (OpenMPI), the third-party baselines of bench_third_party
-# (tinyobjloader, nlohmann-json) and the API reference (doxygen).
+# (tinyobjloader, nlohmann-json), the API reference (doxygen) and a compiler cache (ccache: the
+# build goes through it when present, so repeated builds recompile only what changed).
 OPTIONAL_PACKAGES=(
   pybind11-dev python3-dev python3-numpy python3-pytest
   libembree-dev
   libopenmpi-dev openmpi-bin
   libtinyobjloader-dev nlohmann-json3-dev
   doxygen
+  ccache
 )
 if [ "${GRAINLIGHT_OPTIONAL:-1}" = "0" ]; then OPTIONAL_PACKAGES=(); fi
 

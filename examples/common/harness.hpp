@@ -42,6 +42,18 @@
 #include "common/progress.hpp"
 #include "grainlight/core/parallel.hpp"
 
+#if defined(GRAINLIGHT_EXAMPLE_INFO_LINKED)
+// Version, commit and source directory from the generated examples/common/example_info.cpp.in
+// (linked by every example target), not from compile definitions.
+extern "C" {
+extern const char grainlight_example_version[];
+extern const char grainlight_example_commit[];
+extern const char grainlight_examples_dir[];
+}
+#define GRAINLIGHT_VERSION_STRING grainlight_example_version
+#define GRAINLIGHT_GIT_COMMIT grainlight_example_commit
+#define GRAINLIGHT_EXAMPLES_DIR grainlight_examples_dir
+#endif
 #ifndef GRAINLIGHT_VERSION_STRING
 #define GRAINLIGHT_VERSION_STRING "unknown"
 #endif

@@ -1,6 +1,8 @@
 // Colour science for the spectral renders (core/color.hpp) and the ice index (optics/ice_index.hpp).
 #include <catch2/catch.hpp>
 
+#include "common/data_dir.hpp"
+
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -14,7 +16,7 @@ namespace gl = grainlight;
 
 namespace {
 std::vector<std::vector<double>> read_csv(const std::string& name) {
-    std::ifstream in(std::string(GRAINLIGHT_TEST_DATA_DIR) + "/" + name);
+    std::ifstream in(grainlight_test::data_dir() + "/" + name);
     std::vector<std::vector<double>> rows;
     std::string line;
     while (std::getline(in, line)) {

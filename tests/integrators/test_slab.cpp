@@ -15,6 +15,8 @@
 // Tolerance (halfspace_albedo.md): 3 standard errors + 0.002.
 #include <catch2/catch.hpp>
 
+#include "common/data_dir.hpp"
+
 #include "grainlight/diffusion/h_function.hpp"
 
 #include <algorithm>
@@ -146,7 +148,7 @@ void check_agree(const Estimate& e, const Estimate& f) {
 // tests/data/halfspace_albedo.md ("semi-infinite" reads as inf). The reference values live in
 // that file only (with their sources), so the test and the documented table cannot drift apart.
 std::vector<std::vector<double>> reference_table(const std::string& heading) {
-    std::ifstream f(std::string(GRAINLIGHT_TEST_DATA_DIR) + "/halfspace_albedo.md");
+    std::ifstream f(grainlight_test::data_dir() + "/halfspace_albedo.md");
     REQUIRE(f.good());
     std::vector<std::vector<double>> rows;
     std::string line;

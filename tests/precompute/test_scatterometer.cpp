@@ -2,6 +2,8 @@
 // determinism, the file format and bad input.
 #include <catch2/catch.hpp>
 
+#include "common/data_dir.hpp"
+
 #include <cstdio>
 #include <cstring>
 #include <limits>
@@ -284,7 +286,7 @@ TEST_CASE("convex mesh grains: beta = S / (4 pi) (Cauchy's projected-area theore
     // so a ray uniform over the unit cross section hits it with probability S / (4 pi).
     // Meshes: tests/data/grains_cube.obj (S = 8, beta = 2/pi), grains_octahedron.obj
     // (S = 4 sqrt 3, beta = sqrt(3)/pi), and the procedural sphere mesh (level 3).
-    const std::string dir = GRAINLIGHT_TEST_DATA_DIR;
+    const std::string dir = grainlight_test::data_dir();
     const auto cube = load_obj<float>(dir + "/grains_cube.obj");
     const auto octa = load_obj<float>(dir + "/grains_octahedron.obj");
     CHECK(cube.area() == Approx(8.0).epsilon(1e-6));
