@@ -91,11 +91,13 @@ RaySet grain_rays(const Bvh<float>& bvh, bool inside, std::size_t n) {
 }  // namespace
 
 // One snow grain's closest hit, args: icosphere level, method (0: the BVH alone, the baseline;
-// 1: the cone walk with Grain's budget, finished by the BVH, as Grain::intersect does), rays (0:
-// entering, 1: from inside). Same rays and same hits for both methods.
+// 1: the cone walk with Grain's budget, finished by the BVH, as Grain::intersect does; 2 / 3 / 4:
+// the same with a budget of 8 / 16 / no triangle tests: how the budget was chosen), rays (0:
+// entering, 1: from inside). Same rays and same hits for every method.
 static void BM_GrainQuery(benchmark::State& state) {
     const int level = int(state.range(0));
-    const bool walk = state.range(1) == 1, inside = state.range(2) == 1;
+    const bool walk = state.range(1) >= 1, inside = state.range(2) == 1;
+    const int budget = state.range(1) == 1 ? Grain::star_walk_budget : state.range(1) == 2 ? 8 : state.range(1) == 3 ? 16 : -1;
     const auto mesh = make_grain_mesh<float>(GrainShape::snow, 1.0f, 1, level);
     const Bvh<float> bvh(mesh);
     const auto star = StarMesh::build(mesh);
@@ -109,7 +111,7 @@ static void BM_GrainQuery(benchmark::State& state) {
         TriangleHit<float> h;
         if (walk) {
             float t_resume = 0.0f;
-            if (!star->intersect(rays.o[i], rays.d[i], 10.0f, h, t_resume, Grain::star_walk_budget)) {
+            if (!star->intersect(rays.o[i], rays.d[i], 10.0f, h, t_resume, budget)) {
                 const auto hb = bvh.intersect(rays.o[i], rays.d[i], t_resume, h.valid() ? h.t : 10.0f);
                 if (hb.valid()) h = hb;
             }
@@ -124,7 +126,7 @@ static void BM_GrainQuery(benchmark::State& state) {
     state.counters["hit_rate"] = double(hits) / double(state.iterations());
     state.SetItemsProcessed(state.iterations());
 }
-BENCHMARK(BM_GrainQuery)->ArgsProduct({{1, 2, 3, 4}, {0, 1}, {0, 1}});
+BENCHMARK(BM_GrainQuery)->ArgsProduct({{1, 2, 3, 4}, {0, 1, 2, 3, 4}, {0, 1}});
 
 // Build time; items = triangles.
 static void BM_BvhBuild(benchmark::State& state) {

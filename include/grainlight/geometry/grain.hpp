@@ -71,8 +71,9 @@ public:
     /// the cone walk of geometry/star_mesh.hpp first (the BVH finishes rays the walk hands over);
     /// larger ones by the BVH alone. Procedural grains of icosphere level <= 3 (1280 triangles).
     static constexpr std::size_t star_walk_max_triangles = 1280;
-    /// Cones the walk visits before it hands a ray to the BVH.
-    static constexpr int star_walk_budget = 8;
+    /// Triangles the walk tests before it hands the rest of a ray to the BVH (a bound a grain of at
+    /// most 1280 triangles rarely reaches: it guards against long walks, not a tuning).
+    static constexpr int star_walk_budget = 64;
 
     /// True if the mesh is queried by the cone walk (star-shaped, small enough).
     [[nodiscard]] bool uses_star_walk() const noexcept { return bool(star_); }

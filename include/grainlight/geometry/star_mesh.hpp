@@ -78,6 +78,9 @@ public:
             const float len = glm::length(g);
             s.normal_[f] = len > 0.0f ? g / len : Vec3<float>(0.0f, 0.0f, 1.0f);
             const Vec3d a = s.vertex_[t[0]], b = s.vertex_[t[1]], c = s.vertex_[t[2]];
+            // The triangle lies within its farthest vertex's distance of the origin (with a margin
+            // far above the float round-off of the ray test).
+            s.reach2_.push_back(std::max({glm::dot(a, a), glm::dot(b, b), glm::dot(c, c)}) * (1 + 1e-5));
             // Counter-clockwise seen from the origin <=> positive triple product (a, b, c).
             const double det = glm::dot(glm::cross(a, b), c);
             if (!(det > 0)) return std::nullopt;
@@ -147,7 +150,7 @@ public:
     [[nodiscard]] std::size_t triangle_count() const noexcept { return tri_.size(); }
     /// Bytes of the index (vertices, triangles, cone normals, neighbours, fans, lookup).
     [[nodiscard]] std::size_t memory_bytes() const noexcept {
-        return vertex_.size() * (sizeof(Vec3d) + sizeof(double)) +
+        return vertex_.size() * (sizeof(Vec3d) + sizeof(double)) + reach2_.size() * sizeof(double) +
                tri_.size() * (sizeof(tri_[0]) + sizeof(corner_[0]) + sizeof(normal_[0]) + sizeof(edge_normal_[0]) +
                               sizeof(neighbor_[0])) +
                fan_.size() * sizeof(std::uint32_t) + fan_start_.size() * sizeof(std::uint32_t) +
@@ -157,10 +160,11 @@ public:
     /// Closest hit with t in (0, t_max) along o + t d (t in units of d), as Bvh<float>::intersect
     /// reports it (`prim` is the mesh's triangle index). Returns true when the walk decided: then
     /// `hit.valid()` tells whether a triangle was hit. Returns false when it did not: the ray
-    /// passes through the origin (`t_resume` = 0, `hit` invalid), or `max_steps` cones were
-    /// walked (`max_steps` < 0: no limit but the mesh's own bound); then every hit with t below
+    /// passes through the origin (`t_resume` = 0, `hit` invalid), or more than `max_steps`
+    /// triangles were tested (`max_steps` < 0: no limit but the mesh's own bound); then every hit with t below
     /// `t_resume` is already in `hit` (the closest of them, if any), and the caller finishes the
-    /// query on (t_resume, hit.t or t_max) with its BVH.
+    /// query on (t_resume, hit.t or t_max) with its BVH. Cones whose triangle lies entirely nearer
+    /// the origin than the ray's line are crossed without a test and do not count.
     [[nodiscard]] bool intersect(const Vec3<float>& o, const Vec3<float>& d, float t_max, TriangleHit<float>& hit,
                                  float& t_resume, int max_steps = -1) const noexcept {
         hit = TriangleHit<float>{};
@@ -221,12 +225,19 @@ public:
         // Side of vertex tri_[f][exit]: the walk carries it (the shared edge's signs are known).
         bool side_exit_start = sd[std::size_t(exit)];
         const int budget = max_steps < 0 ? max_steps_ : max_steps;
+        // A ray whose line passes farther from the origin than a triangle's farthest vertex cannot
+        // hit it: such cones are crossed without a test (most of the walk of a ray that misses).
+        const double line2 = mm / ddd;
+        int tested = 0;
         for (int step = 0;; ++step) {
-            test(f);
+            if (line2 <= reach2_[f]) {
+                test(f);
+                ++tested;
+            }
             // Every later cone starts on the exit face: continue only if the closest hit so far
             // lies beyond it.
             if (!(glm::dot(edge_normal_[f][std::size_t(exit)], p_far) < 0)) break;
-            if (step >= budget) {
+            if (tested > budget || step >= max_steps_) {
                 // The cones up to this one are done: resume at its exit face, a little before.
                 const Vec3d& n = edge_normal_[f][std::size_t(exit)];
                 const double rate = glm::dot(n, dd);
@@ -285,6 +296,7 @@ private:
 
     std::vector<Vec3d> vertex_;
     std::vector<double> vertex_len2_;
+    std::vector<double> reach2_;
     std::vector<std::array<std::uint32_t, 3>> tri_;
     std::vector<std::array<Vec3<float>, 3>> corner_;
     std::vector<Vec3<float>> normal_;
