@@ -108,16 +108,8 @@ static void BM_GrainQuery(benchmark::State& state) {
     const RaySet rays = grain_rays(bvh, inside, 4096);
     std::size_t i = 0, hits = 0;
     for (auto _ : state) {
-        TriangleHit<float> h;
-        if (walk) {
-            float t_resume = 0.0f;
-            if (!star->intersect(rays.o[i], rays.d[i], 10.0f, h, t_resume, budget)) {
-                const auto hb = bvh.intersect(rays.o[i], rays.d[i], t_resume, h.valid() ? h.t : 10.0f);
-                if (hb.valid()) h = hb;
-            }
-        } else {
-            h = bvh.intersect(rays.o[i], rays.d[i], 0.0f, 10.0f);
-        }
+        const TriangleHit<float> h = walk ? intersect_star_then_bvh(&*star, bvh, rays.o[i], rays.d[i], 10.0f, budget)
+                                          : bvh.intersect(rays.o[i], rays.d[i], 0.0f, 10.0f);
         hits += h.valid();
         benchmark::DoNotOptimize(h.t);
         i = (i + 1) & 4095;

@@ -7,6 +7,7 @@
 
 #include "grainlight/core/rng.hpp"
 #include "grainlight/core/warp.hpp"
+#include "common/brute_force_hit.hpp"
 #include "grainlight/geometry.hpp"
 
 using namespace grainlight;
@@ -41,16 +42,9 @@ void check_ray(const TriangleMesh<float>& mesh, const Bvh<float>& bvh, const Vec
                Counts& c) {
     ++c.rays;
     const WatertightRay<float> wr(o, d);
-    float best = t_max;
-    bool any = false;
-    for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
-        const auto q = mesh.corners(i);
-        float t, b1, b2;
-        if (intersect_triangle_watertight(wr, q[0], q[1], q[2], 0.0f, best, t, b1, b2)) {
-            best = t;
-            any = true;
-        }
-    }
+    const auto ref = grainlight_test::brute_force_hit(mesh, o, d, t_max);
+    const float best = ref.t;
+    const bool any = ref.valid();
     const auto h = bvh.intersect(o, d, 0.0f, t_max);
     if (h.valid() != any || bvh.occluded(o, d, 0.0f, t_max) != any) {
         ++c.mismatches;

@@ -2,48 +2,18 @@
 // report the closest hit of a brute-force loop over every triangle (same watertight test), for
 // rays entering from outside, rays starting inside, far rays, and rays aimed exactly at vertices
 // and edge midpoints (where neighbouring triangles tie); it must hand over to the BVH correctly
-// at any step budget, and refuse meshes whose triangle cones do not tile the sphere once.
+// at any step budget (intersect_star_then_bvh), and refuse meshes whose triangle cones do not
+// tile the sphere once.
 #include <catch2/catch.hpp>
 
 #include <cmath>
 
 #include "grainlight/core/rng.hpp"
 #include "grainlight/core/warp.hpp"
+#include "common/brute_force_hit.hpp"
 #include "grainlight/geometry.hpp"
 
 using namespace grainlight;
-
-namespace {
-
-// Closest watertight hit over every triangle: (t, triangle) or (inf, max).
-TriangleHit<float> brute_force(const TriangleMesh<float>& mesh, const Vec3f& o, const Vec3f& d, float t_max) {
-    const WatertightRay<float> wr(o, d);
-    TriangleHit<float> best;
-    float closest = t_max;
-    for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
-        const auto c = mesh.corners(i);
-        float t, b1, b2;
-        if (intersect_triangle_watertight(wr, c[0], c[1], c[2], 0.0f, closest, t, b1, b2)) {
-            closest = t;
-            best.t = t;
-            best.prim = std::uint32_t(i);
-        }
-    }
-    return best;
-}
-
-// The walk with a step budget, finished by the BVH as Grain does.
-TriangleHit<float> walk_then_bvh(const StarMesh& s, const Bvh<float>& bvh, const Vec3f& o, const Vec3f& d, float t_max,
-                                 int budget) {
-    TriangleHit<float> h;
-    float t_resume = -1;
-    if (s.intersect(o, d, t_max, h, t_resume, budget)) return h;
-    REQUIRE(t_resume >= 0.0f);
-    const auto hb = bvh.intersect(o, d, t_resume, h.valid() ? h.t : t_max);
-    return hb.valid() ? hb : h;
-}
-
-}  // namespace
 
 TEST_CASE("StarMesh: the cone walk finds the brute-force closest hit on procedural grains", "[geometry][star]") {
     const GrainShape shapes[] = {GrainShape::snow, GrainShape::crystal, GrainShape::rice, GrainShape::flake};
@@ -78,15 +48,20 @@ TEST_CASE("StarMesh: the cone walk finds the brute-force closest hit on procedur
                     }
                     const Vec3f of(o), df(d);
                     const float t_max = 10.0f;
-                    const auto ref = brute_force(mesh, of, df, t_max);
+                    const auto ref = grainlight_test::brute_force_hit(mesh, of, df, t_max);
                     const int budget = int(rng.uniform<double>() * 10);  // 0 .. 9 cones, then the BVH
                     TriangleHit<float> unlimited;
                     float t_resume = 0;
                     const bool decided = star->intersect(of, df, t_max, unlimited, t_resume);
                     undecided += !decided;
-                    const auto h = walk_then_bvh(*star, bvh, of, df, t_max, budget);
+                    // The walk with that budget, finished by the BVH as Grain does.
                     TriangleHit<float> tmp;
-                    resumed += !star->intersect(of, df, t_max, tmp, t_resume, budget);
+                    t_resume = -1;
+                    if (!star->intersect(of, df, t_max, tmp, t_resume, budget)) {
+                        ++resumed;
+                        REQUIRE(t_resume >= 0.0f);
+                    }
+                    const auto h = intersect_star_then_bvh(&*star, bvh, of, df, t_max, budget);
                     ++rays;
                     hits += ref.valid();
                     bool ok = h.valid() == ref.valid();
@@ -132,7 +107,7 @@ TEST_CASE("StarMesh: rays through the origin are handed to the BVH", "[geometry]
     double t = 0;
     Vec3d n(0.0);
     REQUIRE(g.intersect(Vec3d(0.0, 0.0, -2.0), Vec3d(0.0, 0.0, 1.0), 0.0, 10.0, t, n));
-    CHECK(float(t) == brute_force(mesh, Vec3f(0.0f, 0.0f, -2.0f), Vec3f(0.0f, 0.0f, 1.0f), 10.0f).t);
+    CHECK(float(t) == grainlight_test::brute_force_hit(mesh, Vec3f(0.0f, 0.0f, -2.0f), Vec3f(0.0f, 0.0f, 1.0f), 10.0f).t);
 }
 
 TEST_CASE("StarMesh: meshes whose cones do not tile the sphere once are refused", "[geometry][star]") {

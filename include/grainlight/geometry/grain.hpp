@@ -101,15 +101,8 @@ public:
             return true;
         }
         const Vec3d o2 = o + t_min * d;  // float BVH: start at t_min to keep the offset small
-        const Vec3f of(o2), df(d);
-        const float tm = float(std::min(t_max - t_min, 1e30));
-        TriangleHit<float> h;
-        float t_resume = 0.0f;
-        if (!star_ || !star_->intersect(of, df, tm, h, t_resume, star_walk_budget)) {
-            // No walk, or the rest of the ray after the cones the walk covered: the BVH.
-            const auto hb = bvh_->intersect(of, df, t_resume, h.valid() ? h.t : tm);
-            if (hb.valid()) h = hb;
-        }
+        const auto h = intersect_star_then_bvh(star_.get(), *bvh_, Vec3f(o2), Vec3f(d),
+                                               float(std::min(t_max - t_min, 1e30)), star_walk_budget);
         if (!h.valid()) return false;
         t = t_min + double(h.t);
         n = Vec3d(h.n_geom);

@@ -207,15 +207,19 @@ public:
         // forward (a face the line never crosses forward is not an exit).
         std::array<bool, 3> sd{};
         for (int k = 0; k < 3; ++k) sd[std::size_t(k)] = side(tri_[f][std::size_t(k)]);
+        // When the line crosses face k of cone tri going forward (+inf if it never does).
+        auto exit_time = [&](std::uint32_t tri, int k) {
+            const Vec3d& n = edge_normal_[tri][std::size_t(k)];
+            const double rate = glm::dot(n, dd);
+            return rate < 0 ? std::max(0.0, -glm::dot(n, od) / rate) : std::numeric_limits<double>::infinity();
+        };
         int exit = -1;
         double t_exit = std::numeric_limits<double>::infinity();
         int straddling = 0;
         for (int k = 0; k < 3; ++k) {
             if (sd[std::size_t(k)] == sd[std::size_t((k + 1) % 3)]) continue;
             ++straddling;
-            const Vec3d& n = edge_normal_[f][std::size_t(k)];
-            const double rate = glm::dot(n, dd);
-            const double te = rate < 0 ? std::max(0.0, -glm::dot(n, od) / rate) : std::numeric_limits<double>::infinity();
+            const double te = exit_time(f, k);
             if (exit < 0 || te < t_exit) {
                 exit = k;
                 t_exit = te;
@@ -239,10 +243,8 @@ public:
             if (!(glm::dot(edge_normal_[f][std::size_t(exit)], p_far) < 0)) break;
             if (tested > budget || step >= max_steps_) {
                 // The cones up to this one are done: resume at its exit face, a little before.
-                const Vec3d& n = edge_normal_[f][std::size_t(exit)];
-                const double rate = glm::dot(n, dd);
-                const double te = rate < 0 ? -glm::dot(n, od) / rate : 0.0;
-                t_resume = float(std::max(0.0, te * (1 - 1e-6)));
+                const double te = exit_time(f, exit);
+                t_resume = te < std::numeric_limits<double>::infinity() ? float(te * (1 - 1e-6)) : 0.0f;
                 return false;
             }
             const Neighbor& nb = neighbor_[f][std::size_t(exit)];
@@ -311,5 +313,19 @@ private:
     std::vector<std::uint32_t> lookup_;
     int max_steps_ = 0;
 };
+
+/// The closest hit of a mesh with its BVH and, if the mesh is star-shaped, its cone walk
+/// (`star` may be null): the walk with a budget of `max_steps` triangle tests, then the BVH on the
+/// part of the ray the walk handed over (or the whole ray). The same hit as `bvh.intersect(o, d,
+/// 0, t_max)` except at exact vertex / edge ties (see StarMesh::intersect).
+[[nodiscard]] inline TriangleHit<float> intersect_star_then_bvh(const StarMesh* star, const Bvh<float>& bvh,
+                                                               const Vec3<float>& o, const Vec3<float>& d, float t_max,
+                                                               int max_steps) noexcept {
+    TriangleHit<float> h;
+    float t_resume = 0.0f;
+    if (star && star->intersect(o, d, t_max, h, t_resume, max_steps)) return h;
+    const auto hb = bvh.intersect(o, d, t_resume, h.valid() ? h.t : t_max);
+    return hb.valid() ? hb : h;
+}
 
 }  // namespace grainlight
