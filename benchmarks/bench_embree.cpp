@@ -21,8 +21,8 @@
 //
 // Counters: memory_MB (Algorithm 1: its own count of tile + voxels + exemplar BVH bytes; Embree:
 // the growth of the process's resident size while the instances are built and committed),
-// build_s, grains, hit_rate; BM_EmbreeCheckSameHits: mismatches among 8192 rays (first grain or
-// distance beyond float round-off differs).
+// build_s, grains, hit_rate; BM_EmbreeCheckSameHits: mismatches among 8192 rays (first grain
+// differs, or the distance beyond float round-off, 1e-4 (1 + t), over the cosine of incidence).
 #include <benchmark/benchmark.h>
 #include <embree3/rtcore.h>
 
@@ -231,8 +231,11 @@ void BM_EmbreeCheckSameHits(benchmark::State& st) {
                 bool same = a.hit == (b.first >= 0);
                 if (same && a.hit) {
                     const AggregateGrain& g = e.grains[std::size_t(b.first)];
+                    // A float round-off in the instance transform moves a hit along the ray by
+                    // that round-off over the cosine of incidence: grazing hits get that slack.
+                    const double cos_i = std::max(std::abs(glm::dot(a.n, rays.d[k])), 1e-3);
                     same = g.sphere == a.grain.sphere && g.tile == a.grain.tile &&
-                           std::abs(b.second - a.t) <= 1e-4 * (1.0 + a.t);
+                           std::abs(b.second - a.t) <= 1e-4 * (1.0 + a.t) / cos_i;
                 }
                 mismatches += !same;
             }

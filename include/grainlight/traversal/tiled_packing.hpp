@@ -192,16 +192,22 @@ public:
         g.center = Vec3d(double(tile.x - frame.x), double(tile.y - frame.y), double(tile.z - frame.z)) * L +
                    tile_.center(sphere);
         g.key = mix64(tile_key ^ std::uint64_t(sphere));  // = hash_words(seed, tile.x, tile.y, tile.z, sphere)
-        Rng rng = Rng::from_key(g.key);
-        const double u1 = rng.uniform<double>(), u2 = rng.uniform<double>(), u3 = rng.uniform<double>();
+        // The grain's uniform numbers: the SplitMix64 sequence that starts at its key (four
+        // independent hashes, no generator state to set up), 53 bits each.
+        auto uniform = [&](std::uint64_t i) {
+            return double(mix64(g.key + i * 0x9e3779b97f4a7c15ull) >> 11) * 0x1p-53;
+        };
+        const double u1 = uniform(0), u2 = uniform(1), u3 = uniform(2);
         const double s1 = std::sqrt(1 - u1), s2 = std::sqrt(u1);
-        const double a = 2 * pi_v<double> * u2, b = 2 * pi_v<double> * u3;
-        const double x = s1 * std::sin(a), y = s1 * std::cos(a), z = s2 * std::sin(b), w = s2 * std::cos(b);
+        double sa, ca, sb, cb;
+        sincos_2pi(u2, sa, ca);  // sin / cos of 2 pi u without a library call (core/math.hpp)
+        sincos_2pi(u3, sb, cb);
+        const double x = s1 * sa, y = s1 * ca, z = s2 * sb, w = s2 * cb;
         // Rotation matrix of the unit quaternion (w, x, y, z), rows.
         g.to_local[0] = Vec3d(1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y));
         g.to_local[1] = Vec3d(2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x));
         g.to_local[2] = Vec3d(2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y));
-        g.exemplar = weights_.size() > 1 ? std::uint32_t(mix_.sample(rng.uniform<double>())) : 0u;
+        g.exemplar = weights_.size() > 1 ? std::uint32_t(mix_.sample(uniform(3))) : 0u;
         return g;
     }
 
