@@ -28,6 +28,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <concepts>
 #include <cstdint>
@@ -434,9 +435,10 @@ public:
     /// Bytes of the voxel classes (2 bits per voxel, rounded up to 64-bit words); the shape
     /// (e.g. a mesh BVH for the partial-voxel test) and the refinement are separate.
     [[nodiscard]] std::size_t memory_bytes() const noexcept { return bits_.size() * sizeof(std::uint64_t); }
-    /// Bytes of the sub-voxel refinement of the partial voxels (24 per partial voxel, or 0).
+    /// Bytes of the sub-voxel refinement of the partial voxels (16 per partial voxel and 4 per
+    /// 32 voxels for the rank index, or 0).
     [[nodiscard]] std::size_t refinement_bytes() const noexcept {
-        return partial_ids_.size() * sizeof(std::uint64_t) + sub_bits_.size() * sizeof(sub_bits_[0]);
+        return partial_rank_.size() * sizeof(std::uint32_t) + sub_bits_.size() * sizeof(sub_bits_[0]);
     }
     /// True if partial voxels carry a 4^3 sub-voxel classification (see point_inside).
     [[nodiscard]] bool refined() const noexcept { return !sub_bits_.empty(); }
@@ -458,15 +460,12 @@ public:
         const VoxelClass c = get(idx);
         if (c != VoxelClass::partial) return c == VoxelClass::inside;
         if (!sub_bits_.empty()) {
-            const auto it = std::lower_bound(partial_ids_.begin(), partial_ids_.end(), std::uint64_t(idx));
-            if (it != partial_ids_.end() && *it == idx) {
-                int q[3];
-                for (int a = 0; a < 3; ++a) q[a] = std::clamp(int(local[a] / side_ * sub), 0, sub - 1);
-                const auto& w = sub_bits_[std::size_t(it - partial_ids_.begin())];
-                const int si = (q[2] * sub + q[1]) * sub + q[0];
-                const auto sc = VoxelClass((w[std::size_t(si >> 5)] >> (2 * (si & 31))) & 3u);
-                if (sc != VoxelClass::partial) return sc == VoxelClass::inside;
-            }
+            int q[3];
+            for (int a = 0; a < 3; ++a) q[a] = std::clamp(int(local[a] / side_ * sub), 0, sub - 1);
+            const auto& w = sub_bits_[partial_rank(idx)];
+            const int si = (q[2] * sub + q[1]) * sub + q[0];
+            const auto sc = VoxelClass((w[std::size_t(si >> 5)] >> (2 * (si & 31))) & 3u);
+            if (sc != VoxelClass::partial) return sc == VoxelClass::inside;
         }
         return shape_.inside(to_shape_frame(tile, local));
     }
@@ -491,7 +490,6 @@ private:
         if (n_partial_ == 0) return;
         const std::size_t n = voxel_count();
         auto store = [&](auto&& sub_class) {
-            partial_ids_.reserve(n_partial_);
             sub_bits_.reserve(n_partial_);
             std::size_t i = 0;
             for (std::int64_t k = 0; k < dims_[2]; ++k)
@@ -504,9 +502,15 @@ private:
                             const auto c = std::uint64_t(sub_class(x, j, k, qx, qy, qz));
                             w[std::size_t(si >> 5)] |= c << (2 * (si & 31));
                         }
-                        partial_ids_.push_back(i);
                         sub_bits_.push_back(w);
                     }
+            // Rank index: partial voxels before each 64-bit word of classes (a popcount inside it).
+            partial_rank_.resize(bits_.size());
+            std::uint32_t before = 0;
+            for (std::size_t wi = 0; wi < bits_.size(); ++wi) {
+                partial_rank_[wi] = before;
+                before += std::uint32_t(std::popcount(partial_lanes(bits_[wi])));
+            }
         };
         const double h = side_ / sub;
         if constexpr (requires(std::vector<VoxelClass>& out) { shape_.classify_grid(origin, side_, dims_, out); }) {
@@ -535,6 +539,16 @@ private:
         idx = std::size_t((r[2] * dims_[1] + r[1]) * dims_[0] + r[0]);
         return true;
     }
+    /// One bit (the low bit of each 2-bit lane) per partial voxel of a word of classes.
+    [[nodiscard]] static std::uint64_t partial_lanes(std::uint64_t w) noexcept {
+        return (w >> 1) & ~w & 0x5555555555555555ull;  // class 2 = binary 10
+    }
+    /// Index of partial voxel i among the partial voxels in grid order (= its sub_bits_ entry):
+    /// the word's rank plus the partial voxels before i inside the word. O(1), no search.
+    [[nodiscard]] std::size_t partial_rank(std::size_t i) const noexcept {
+        const std::uint64_t below = (std::uint64_t(1) << (2 * (i & 31))) - 1;
+        return partial_rank_[i >> 5] + std::size_t(std::popcount(partial_lanes(bits_[i >> 5]) & below));
+    }
     [[nodiscard]] VoxelClass get(std::size_t i) const noexcept {
         return VoxelClass((bits_[i >> 5] >> (2 * (i & 31))) & 3u);
     }
@@ -549,8 +563,8 @@ private:
     std::array<std::int64_t, 3> lo_{}, dims_{};
     std::vector<std::uint64_t> bits_;
     std::size_t n_inside_ = 0, n_partial_ = 0;
-    std::vector<std::uint64_t> partial_ids_;               // sorted indices of refined partial voxels
-    std::vector<std::array<std::uint64_t, 2>> sub_bits_;  // their 4^3 sub-voxel classes, 2 bits each
+    std::vector<std::uint32_t> partial_rank_;              // partial voxels before each word of bits_
+    std::vector<std::array<std::uint64_t, 2>> sub_bits_;  // 4^3 sub-voxel classes of every partial voxel, 2 bits each, grid order
 };
 
 /// The whole space (an infinite aggregate: Meng15's free-flight and detector-sphere experiments,
