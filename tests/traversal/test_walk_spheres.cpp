@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 #include <tuple>
+#include <type_traits>
 #include <vector>
 
 #include "grainlight/core/rng.hpp"
@@ -57,19 +58,26 @@ TEST_CASE("walk_spheres reports the spheres of repeated first_hit, bit for bit",
             const double t_max = k % 3 == 0 ? std::numeric_limits<double>::infinity() : 6.0;
             const std::size_t cap = 60;
             const std::vector<TileHit> ref = by_first_hit(tile, ot, o, d, t_min, t_max, cap);
-            std::vector<TileHit> got;
-            const bool stopped = tile.walk_spheres(
-                ot, o, d, t_min, t_max, [](const Vec3i64&) { return true; },
-                [&](const TileHit& h) {
-                    got.push_back(h);
-                    return got.size() >= cap;
-                });
-            CHECK(stopped == (got.size() >= cap));
-            REQUIRE(got.size() == ref.size());
-            for (std::size_t i = 0; i < ref.size(); ++i) {
-                INFO("ray " << k << " sphere " << i);
-                CHECK(same(got[i], ref[i]));
-            }
+            // The default candidate list, and lists of 1 and 2 that overflow all the time (the
+            // rescan path).
+            auto check_walk = [&](auto capacity) {
+                std::vector<TileHit> got;
+                const bool stopped = tile.template walk_spheres<decltype(capacity)::value>(
+                    ot, o, d, t_min, t_max, [](const Vec3i64&) { return true; },
+                    [&](const TileHit& h) {
+                        got.push_back(h);
+                        return got.size() >= cap;
+                    });
+                CHECK(stopped == (got.size() >= cap));
+                REQUIRE(got.size() == ref.size());
+                for (std::size_t i = 0; i < ref.size(); ++i) {
+                    INFO("ray " << k << " sphere " << i << " list capacity " << decltype(capacity)::value);
+                    CHECK(same(got[i], ref[i]));
+                }
+            };
+            check_walk(std::integral_constant<int, 8>{});
+            check_walk(std::integral_constant<int, 1>{});
+            check_walk(std::integral_constant<int, 2>{});
             total += ref.size();
         }
         CHECK(total > 2000);  // the rays met many spheres (the comparison is not vacuous)

@@ -414,7 +414,11 @@ public:
     /// (the sphere lies before the last reported exit, after t_max, behind the current nearest
     /// candidate, or farther than R from the ray line, each with a conservative round-off
     /// margin), and intersect_sphere (the exact test of first_hit) only on the survivors.
-    template <class TileFilter, class Visit>
+    ///
+    /// `MaxCandidates` (>= 1) is the capacity of the list of spheres found ahead of the walk (see
+    /// the body); any capacity gives the same spheres, a small one only rescans cells more often.
+    template <int MaxCandidates = 8, class TileFilter, class Visit>
+        requires(MaxCandidates >= 1)
     bool walk_spheres(const Vec3i64& origin_tile, const Vec3d& local_origin, const Vec3d& d, double t_min,
                       double t_max, TileFilter&& tile_filter, Visit&& visit) const
         noexcept(noexcept(tile_filter(std::declval<const Vec3i64&>())) && noexcept(visit(std::declval<const TileHit&>()))) {
@@ -449,11 +453,36 @@ public:
         const double a_dd = dlen * dlen;
         const double r2 = radius_ * radius_;
         double cursor = t_min;             // every sphere exiting at or before this was reported
+        // The candidates found since the list was last cleared: spheres of the scanned cells hit by
+        // the ray with t1 > cursor and t0 <= t_end, ascending t0, each sphere once. While nothing
+        // was dropped the list holds every such sphere, so after a visit the next one is its
+        // front and the cell is not scanned again (most rays). A full list drops its last
+        // candidate and becomes lossy: the next visit clears it and rescans the current cell,
+        // which is always complete (a sphere whose entry point lies in an earlier cell was visited
+        // before the walk left that cell; one whose entry lies ahead is listed in a later cell).
         struct Candidate {
-            double t0 = std::numeric_limits<double>::infinity(), t1 = 0;
-            const Entry* e = nullptr;
-            std::array<std::int64_t, 3> home{};
-        } best;
+            double t0, t1;
+            const Entry* e;
+            std::array<std::int64_t, 3> home;
+        };
+        constexpr int max_candidates = MaxCandidates;
+        std::array<Candidate, max_candidates> cand;
+        int n_cand = 0;
+        bool lossy = false;
+        auto insert = [&](const Candidate& c) {
+            for (int i = 0; i < n_cand; ++i)  // the same sphere through another cell
+                if (cand[std::size_t(i)].e->sphere == c.e->sphere && cand[std::size_t(i)].home == c.home) return;
+            int i = n_cand;
+            if (n_cand == max_candidates) {
+                lossy = true;
+                if (!(c.t0 < cand[max_candidates - 1].t0)) return;
+                i = max_candidates - 1;
+            } else {
+                ++n_cand;
+            }
+            for (; i > 0 && c.t0 < cand[std::size_t(i - 1)].t0; --i) cand[std::size_t(i)] = cand[std::size_t(i - 1)];
+            cand[std::size_t(i)] = c;
+        };
         // Cull in float over the cell's candidates (structure of arrays, 8 lanes, vectorized by
         // the compiler), relative to the ray point at the cell entry so the magnitudes stay a
         // few cells: g = centre - P, s = g . u (u = d / |d|). A sphere survives unless it ends
@@ -490,11 +519,8 @@ public:
                                   base[2][en->image[2] + 1] + en->c.z);
                     double t0, t1;
                     if (!intersect_sphere(o, d, a_dd, c, r2, t0, t1)) continue;
-                    if (!(t1 > cursor) || t0 > t_end || !(t0 < best.t0)) continue;
-                    best.t0 = t0;
-                    best.t1 = t1;
-                    best.e = en;
-                    best.home = {tile[0] + en->image[0], tile[1] + en->image[1], tile[2] + en->image[2]};
+                    if (!(t1 > cursor) || t0 > t_end) continue;
+                    insert(Candidate{t0, t1, en, {tile[0] + en->image[0], tile[1] + en->image[1], tile[2] + en->image[2]}});
                 }
             }
         };
@@ -507,17 +533,26 @@ public:
             if (searched) scan(cell, t_cell);
             // Every sphere entering before this cell's exit overlaps a cell visited so far: the
             // nearest candidate is final.
-            while (best.e && std::max(best.t0, t_min) <= t_exit_cell) {
+            while (n_cand > 0 && std::max(cand[0].t0, t_min) <= t_exit_cell) {
+                const Candidate& b = cand[0];
                 TileHit h;
                 h.hit = true;
-                h.t_enter = best.t0;
-                h.t_exit = best.t1;
-                h.sphere = best.e->sphere;
-                h.tile = Vec3i64(frame.x + best.home[0], frame.y + best.home[1], frame.z + best.home[2]);
-                cursor = best.t1;
-                best = Candidate{};
+                h.t_enter = b.t0;
+                h.t_exit = b.t1;
+                h.sphere = b.e->sphere;
+                h.tile = Vec3i64(frame.x + b.home[0], frame.y + b.home[1], frame.z + b.home[2]);
+                cursor = b.t1;
                 if (visit(static_cast<const TileHit&>(h))) return true;
-                if (searched) scan(cell, t_cell);
+                if (lossy) {
+                    n_cand = 0;
+                    lossy = false;
+                    if (searched) scan(cell, t_cell);
+                } else {  // drop the front and anything the cursor has passed
+                    int k = 0;
+                    for (int i = 1; i < n_cand; ++i)
+                        if (cand[std::size_t(i)].t1 > cursor) cand[std::size_t(k++)] = cand[std::size_t(i)];
+                    n_cand = k;
+                }
             }
             if (!(t_exit_cell < std::numeric_limits<double>::infinity())) break;
             r[axis] += step[axis];
