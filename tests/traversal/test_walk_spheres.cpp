@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <tuple>
 #include <type_traits>
@@ -136,4 +137,44 @@ TEST_CASE("walk_spheres with a tile filter only drops spheres of rejected tiles"
     CHECK(kept > 500);
     CHECK(dropped > 100);        // the filter did remove spheres
     CHECK(visits_rejected > 100);
+}
+
+TEST_CASE("floor_i64 is the exact floor, saturated; walk_spheres' tile split agrees with floor_div", "[tile][walk]") {
+    // Closed forms: floor of integers, of values just off them, of negatives, saturation.
+    using detail::floor_i64;
+    CHECK(floor_i64(0.0) == 0);
+    CHECK(floor_i64(-0.0) == 0);
+    CHECK(floor_i64(2.999) == 2);
+    CHECK(floor_i64(-0.5) == -1);
+    CHECK(floor_i64(-1.0) == -1);
+    CHECK(floor_i64(-1.0000000000000002) == -2);
+    CHECK(floor_i64(std::nextafter(3.0, 0.0)) == 2);
+    CHECK(floor_i64(-std::ldexp(1.0, 53) + 2) == -(std::int64_t(1) << 53) + 2);
+    CHECK(floor_i64(std::ldexp(1.0, 60)) == std::int64_t(1) << 60);
+    CHECK(floor_i64(1e19) == std::int64_t(1) << 62);
+    CHECK(floor_i64(-1e19) == -(std::int64_t(1) << 62));
+    CHECK(floor_i64(std::numeric_limits<double>::quiet_NaN()) == -(std::int64_t(1) << 62));
+    Rng rng = Rng::from_key(77);
+    for (int i = 0; i < 10000; ++i) {
+        const double x = (rng.uniform<double>() - 0.5) * std::ldexp(1.0, int(rng.uniform<double>() * 60));
+        REQUIRE(double(floor_i64(x)) == std::floor(x));
+    }
+    // A ray starting far along its line (t_min of many tiles, negative and positive coordinates)
+    // reports the spheres of repeated first_hit: the walk's tile / cell split is floor_div's.
+    Rng trng = Rng::from_key(78);
+    const PeriodicTile tile = random_sequential_addition(30, 0.3, trng, 1.0);
+    for (int k = 0; k < 200; ++k) {
+        const Vec3d o(rng.uniform<double>() * 3, rng.uniform<double>() * 3, rng.uniform<double>() * 3);
+        const Vec3d d = sample_uniform_sphere<double>(rng.uniform2<double>());
+        const double t_min = tile.side() * (1 + 40 * rng.uniform<double>()) + (k % 2 ? 0.0 : tile.side() / 7);
+        const std::vector<TileHit> ref = by_first_hit(tile, Vec3i64(0), o, d, t_min, t_min + 8, 20);
+        std::vector<TileHit> got;
+        tile.walk_spheres(Vec3i64(0), o, d, t_min, t_min + 8, [](const Vec3i64&) { return true; },
+                          [&](const TileHit& h) {
+                              got.push_back(h);
+                              return false;
+                          });
+        REQUIRE(got.size() == ref.size());
+        for (std::size_t i = 0; i < ref.size(); ++i) CHECK(same(got[i], ref[i]));
+    }
 }

@@ -75,7 +75,10 @@ namespace detail {
     constexpr double lim = 4.6e18;
     if (!(x > -lim)) return -(std::int64_t(1) << 62);
     if (!(x < lim)) return std::int64_t(1) << 62;
-    return static_cast<std::int64_t>(std::floor(x));
+    // Truncate, then step down for negative non-integers: exact, and no library call (std::floor
+    // is one without SSE4.1, several per traced ray).
+    const auto i = static_cast<std::int64_t>(x);
+    return i - (static_cast<double>(i) > x ? 1 : 0);
 }
 
 /// Cells per axis of a cell grid over a periodic cube of side `side` whose cells are at least
@@ -446,8 +449,19 @@ public:
             r[a] = detail::floor_i64(p0[a] / h_);
             step[a] = d[a] > 0 ? 1 : (d[a] < 0 ? -1 : 0);
             t_next[a] = next_crossing(r[a], step[a], o[a], d[a]);
-            tile[a] = detail::floor_div(r[a], m_);
+            // tile = floor(r / m) without a 64-bit integer division: the tile of p0, corrected
+            // by the cell index (the two floors may disagree by one at a tile face).
+            constexpr std::int64_t near = std::int64_t(1) << 40;  // far rays: the plain division
+            tile[a] = r[a] > -near && r[a] < near ? detail::floor_i64(p0[a] / side_) : detail::floor_div(r[a], m_);
             j[a] = r[a] - tile[a] * m_;
+            while (j[a] < 0) {
+                --tile[a];
+                j[a] += m_;
+            }
+            while (j[a] >= m_) {
+                ++tile[a];
+                j[a] -= m_;
+            }
             set_base(a);
         }
         const double a_dd = dlen * dlen;
@@ -547,11 +561,13 @@ public:
                     n_cand = 0;
                     lossy = false;
                     if (searched) scan(cell, t_cell);
-                } else {  // drop the front and anything the cursor has passed
+                } else if constexpr (max_candidates > 1) {  // drop the front and what the cursor passed
                     int k = 0;
-                    for (int i = 1; i < n_cand; ++i)
+                    for (int i = 1; i < std::min(n_cand, max_candidates); ++i)
                         if (cand[std::size_t(i)].t1 > cursor) cand[std::size_t(k++)] = cand[std::size_t(i)];
                     n_cand = k;
+                } else {
+                    n_cand = 0;
                 }
             }
             if (!(t_exit_cell < std::numeric_limits<double>::infinity())) break;
