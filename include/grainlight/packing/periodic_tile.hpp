@@ -563,7 +563,7 @@ public:
                     if (searched) scan(cell, t_cell);
                 } else if constexpr (max_candidates > 1) {  // drop the front and what the cursor passed
                     int k = 0;
-                    for (int i = 1; i < std::min(n_cand, max_candidates); ++i)
+                    for (int i = 1; i < n_cand; ++i)
                         if (cand[std::size_t(i)].t1 > cursor) cand[std::size_t(k++)] = cand[std::size_t(i)];
                     n_cand = k;
                 } else {
