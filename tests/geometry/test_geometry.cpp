@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <glm/gtc/quaternion.hpp>
+
 #include "grainlight/core/rng.hpp"
 #include "grainlight/core/warp.hpp"
 #include "grainlight/geometry.hpp"
@@ -151,6 +153,28 @@ TEST_CASE("uniform random rotation is orthonormal and unbiased", "[geometry][tra
     Transform<double> tr{uniform_random_rotation(Vec3d(0.1, 0.2, 0.3)), 2.0, Vec3d(1, 2, 3)};
     const Vec3d p(0.3, -0.2, 0.5);
     CHECK(glm::length(tr.point_to_local(tr.point_to_world(p)) - p) < 1e-12);
+}
+
+TEST_CASE("rotation_from_quaternion agrees with GLM's quaternion rotation", "[geometry][transform]") {
+    // Independent reference: glm::dquat(w, x, y, z) * v (GLM's own q v q* product).
+    Pcg32 rng = Pcg32::from_key(11);
+    for (int i = 0; i < 2000; ++i) {
+        const Vec3d u = rng.uniform3<double>();
+        const double a = 2 * grainlight::pi_v<double> * u.y, b = 2 * grainlight::pi_v<double> * u.z;
+        const double s1 = std::sqrt(1 - u.x), s2 = std::sqrt(u.x);
+        const double w = s2 * std::cos(b), x = s1 * std::sin(a), y = s1 * std::cos(a), z = s2 * std::sin(b);
+        const glm::dquat q(w, x, y, z);
+        const Rotation<double> r = rotation_from_quaternion(w, x, y, z);
+        const Vec3d v = rng.uniform3<double>() * 2.0 - Vec3d(1.0);
+        CHECK(glm::length(r.to_world(v) - q * v) < 1e-14);
+        CHECK(glm::length(r.to_local(v) - glm::conjugate(q) * v) < 1e-14);
+        // Shoemake's map takes world to local by this quaternion, and uniform_random_rotation is
+        // Shoemake's map.
+        const Rotation<double> s = shoemake_rotation(u.x, std::sin(a), std::cos(a), std::sin(b), std::cos(b));
+        const Rotation<double> g = uniform_random_rotation(u);
+        CHECK(glm::length(s.to_local(v) - q * v) < 1e-14);
+        CHECK(glm::length(g.to_local(v) - q * v) < 1e-14);
+    }
 }
 
 TEST_CASE("OBJ loader: good file, unreadable path, malformed files", "[geometry][obj]") {

@@ -33,18 +33,37 @@ struct Rotation {
     }
 };
 
+/// The rotation of the unit quaternion q = (w, x, y, z): to_world(v) = q v q* and
+/// to_local(v) = q* v q (the rows are the columns of q's rotation matrix). The caller keeps q
+/// unit; nothing is normalized here.
+template <std::floating_point F>
+[[nodiscard]] GRAINLIGHT_HOST_DEVICE inline Rotation<F> rotation_from_quaternion(F w, F x, F y, F z) noexcept {
+    Rotation<F> r;
+    r.r0 = Vec3<F>(F(1) - F(2) * (y * y + z * z), F(2) * (x * y + w * z), F(2) * (x * z - w * y));
+    r.r1 = Vec3<F>(F(2) * (x * y - w * z), F(1) - F(2) * (x * x + z * z), F(2) * (y * z + w * x));
+    r.r2 = Vec3<F>(F(2) * (x * z + w * y), F(2) * (y * z - w * x), F(1) - F(2) * (x * x + y * y));
+    return r;
+}
+
+/// Shoemake's uniform rotation (1992, "Uniform random rotations", Graphics Gems III) from
+/// u1 in [0, 1] and the sines and cosines of the two angles a = 2 pi u2, b = 2 pi u3, for callers
+/// that compute them their own way (`sincos_2pi`). With Shoemake's unit quaternion
+/// q = (w, x, y, z) = (sqrt(u1) cos b, sqrt(1 - u1) sin a, sqrt(1 - u1) cos a, sqrt(u1) sin b)
+/// the result maps world to local by q: to_local(v) = q v q*. (q and its conjugate are equally
+/// uniform; this orientation is the one every grain and render so far was drawn with.)
+template <std::floating_point F>
+[[nodiscard]] GRAINLIGHT_HOST_DEVICE inline Rotation<F> shoemake_rotation(F u1, F sin_a, F cos_a, F sin_b,
+                                                                          F cos_b) noexcept {
+    const F s1 = safe_sqrt(F(1) - u1), s2 = safe_sqrt(u1);
+    return rotation_from_quaternion(s2 * cos_b, -(s1 * sin_a), -(s1 * cos_a), -(s2 * sin_b));  // q*
+}
+
 /// Uniformly distributed rotation (Haar measure on SO(3)) from u in [0,1)^3, via a uniform unit
 /// quaternion (Shoemake 1992, "Uniform random rotations", Graphics Gems III).
 template <std::floating_point F>
 [[nodiscard]] GRAINLIGHT_HOST_DEVICE inline Rotation<F> uniform_random_rotation(const Vec3<F>& u) noexcept {
-    const F s1 = safe_sqrt(F(1) - u.x), s2 = safe_sqrt(u.x);
-    const F a1 = F(2) * pi_v<F> * u.y, a2 = F(2) * pi_v<F> * u.z;
-    const F x = s1 * std::sin(a1), y = s1 * std::cos(a1), z = s2 * std::sin(a2), w = s2 * std::cos(a2);
-    Rotation<F> r;
-    r.r0 = Vec3<F>(F(1) - F(2) * (y * y + z * z), F(2) * (x * y - w * z), F(2) * (x * z + w * y));
-    r.r1 = Vec3<F>(F(2) * (x * y + w * z), F(1) - F(2) * (x * x + z * z), F(2) * (y * z - w * x));
-    r.r2 = Vec3<F>(F(2) * (x * z - w * y), F(2) * (y * z + w * x), F(1) - F(2) * (x * x + y * y));
-    return r;
+    const F a = F(2) * pi_v<F> * u.y, b = F(2) * pi_v<F> * u.z;
+    return shoemake_rotation(u.x, std::sin(a), std::cos(a), std::sin(b), std::cos(b));
 }
 
 /// Similarity transform x_world = translation + scale * R.to_world(x_local) (scale > 0).

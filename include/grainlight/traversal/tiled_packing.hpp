@@ -41,6 +41,7 @@
 #include "grainlight/core/math.hpp"
 #include "grainlight/core/rng.hpp"
 #include "grainlight/core/vector.hpp"
+#include "grainlight/geometry/transform.hpp"
 #include "grainlight/packing/periodic_tile.hpp"
 #include "grainlight/traversal/dda.hpp"
 
@@ -198,15 +199,11 @@ public:
             return double(mix64(g.key + i * 0x9e3779b97f4a7c15ull) >> 11) * 0x1p-53;
         };
         const double u1 = uniform(0), u2 = uniform(1), u3 = uniform(2);
-        const double s1 = std::sqrt(1 - u1), s2 = std::sqrt(u1);
         double sa, ca, sb, cb;
         sincos_2pi(u2, sa, ca);  // sin / cos of 2 pi u without a library call (core/math.hpp)
         sincos_2pi(u3, sb, cb);
-        const double x = s1 * sa, y = s1 * ca, z = s2 * sb, w = s2 * cb;
-        // Rotation matrix of the unit quaternion (w, x, y, z), rows.
-        g.to_local[0] = Vec3d(1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y));
-        g.to_local[1] = Vec3d(2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x));
-        g.to_local[2] = Vec3d(2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y));
+        const Rotation<double> r = shoemake_rotation(u1, sa, ca, sb, cb);  // geometry/transform.hpp
+        g.to_local = {r.r0, r.r1, r.r2};
         g.exemplar = weights_.size() > 1 ? std::uint32_t(mix_.sample(uniform(3))) : 0u;
         return g;
     }
