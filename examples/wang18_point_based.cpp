@@ -72,6 +72,7 @@ using Renderer = gl::PointBasedRenderer<Phase, gl::SphereShape<float>>;
 struct Params {
     bool full = false;
     int vpt_spp = 512, n_surface = 6000, bounce_generations = 2, bounce_samples = 512;
+    int k_max = 6, bounce_rays = 4, bounce_k_max = 3;  ///< camera samples per ray (Eq. 10), the bounce gather's rays and samples
     double eps1 = 0.2;        ///< Alg. 1 solid-angle threshold (sr), thick case (Table 3's 0.2 for BmpS.)
     double small_eps1 = 1.0;  ///< the same for the small sphere (reported, not bounded)
     std::uint64_t seed = 1;
@@ -113,7 +114,7 @@ CaseResult run_case(const gl_examples::Example& ex, const Case& cs, const gl::Ms
     gl::PointBasedOptions<float> po;
     po.light_samples = thick ? 2 : 4;
     po.volume_step = thick ? 0.2f / sigma_t.average() : 0.05f;
-    po.k_max = full ? 16 : 6;
+    po.k_max = prm.k_max;
     po.camera_bounces = thick ? 0 : (full ? 2 : 1);
     po.light_bounces = thick ? 0 : 2;
     po.max_optical_depth = thick ? 8.0f : 10.0f;
@@ -121,8 +122,8 @@ CaseResult run_case(const gl_examples::Example& ex, const Case& cs, const gl::Ms
     po.cut.eps2 = 0.2f * po.cut.eps1;
     po.two_step_depth = 3;
     po.bounce_samples = prm.bounce_samples;
-    po.bounce_rays = full ? 8 : 4;
-    po.bounce_k_max = full ? 6 : 3;
+    po.bounce_rays = prm.bounce_rays;
+    po.bounce_k_max = prm.bounce_k_max;
     po.bounce_generations = prm.bounce_generations;
     double c0 = cpu_seconds();
     gl::Rng lrng = gl::Rng::from_key(seed, 0x5742u);
@@ -265,6 +266,12 @@ int main(int argc, char** argv) {
             prm.small_eps1 = ex.opt<double>("small-eps1", 1.0, 0.2, "eps1 of the small sphere, in (0, 10]");
             prm.bounce_samples = ex.opt<int>("bounce-samples", 512, 4096,
                                              "bounce surface samples of Eq. 8, their own Fibonacci lattice (<= 1000000)");
+            prm.k_max = ex.opt<int>("k-max", 6, 16, "camera samples per point-based ray (Eq. 10), in [1, 4096]");
+            prm.bounce_rays = ex.opt<int>("bounce-rays", 4, 8, "inward rays per bounce sample gathering its light, in [1, 1024]");
+            prm.bounce_k_max = ex.opt<int>("bounce-k-max", 3, 6, "camera samples on each of those rays, in [1, 4096]");
+            const std::string table_quality = ex.opt<std::string>(
+                "table", "quick", "full",
+                "the MS table's resolution and particle count: quick (48 x 96 x 12 x 6, 2e5) or full (96 x 192 x 18 x 9, 2e6)");
             prm.bounce_generations =
                 ex.opt<int>("bounce-generations", 2, "reflections carried by the bounced term: 1 (Eq. 8 as in the paper) or 2");
             const bool study = ex.opt<bool>(
@@ -287,6 +294,15 @@ int main(int argc, char** argv) {
             if (prm.bounce_samples < 1 || prm.bounce_samples > 1000000)
                 throw gl_examples::cli_error("--bounce-samples = " + std::to_string(prm.bounce_samples) +
                                              " must be in [1, 1000000]");
+            if (prm.k_max < 1 || prm.k_max > 4096)
+                throw gl_examples::cli_error("--k-max = " + std::to_string(prm.k_max) + " must be in [1, 4096]");
+            if (prm.bounce_rays < 1 || prm.bounce_rays > 1024)
+                throw gl_examples::cli_error("--bounce-rays = " + std::to_string(prm.bounce_rays) + " must be in [1, 1024]");
+            if (prm.bounce_k_max < 1 || prm.bounce_k_max > 4096)
+                throw gl_examples::cli_error("--bounce-k-max = " + std::to_string(prm.bounce_k_max) +
+                                             " must be in [1, 4096]");
+            if (table_quality != "quick" && table_quality != "full")
+                throw gl_examples::cli_error("--table = " + table_quality + " must be quick or full");
             if (prm.bounce_generations < 1 || prm.bounce_generations > 2)
                 throw gl_examples::cli_error("--bounce-generations = " + std::to_string(prm.bounce_generations) +
                                              " must be 1 or 2");
@@ -296,14 +312,15 @@ int main(int argc, char** argv) {
             const float g = 0.7f;
             const gl::RGB albedo{0.9545f, 0.6774f, 0.4565f};
             gl::MsTableOptions to;
-            to.n_rho = full ? 96 : 48;
-            to.n_z = full ? 192 : 96;
-            to.n_theta = full ? 18 : 12;
-            to.n_phi = full ? 9 : 6;
+            const bool full_table = table_quality == "full";
+            to.n_rho = full_table ? 96 : 48;
+            to.n_z = full_table ? 192 : 96;
+            to.n_theta = full_table ? 18 : 12;
+            to.n_phi = full_table ? 9 : 6;
             to.rho_max = 10;
             to.z_min = -10;
             to.z_max = 10;
-            to.photons = full ? 2000000 : 200000;
+            to.photons = full_table ? 2000000 : 200000;
             to.seed = prm.seed;
             const auto table_path = out / ("wang18_ms_table_g0.7_bmps_" + std::to_string(to.n_rho) + "x" +
                                            std::to_string(to.n_z) + "x" + std::to_string(to.n_theta) + "x" +

@@ -16,6 +16,11 @@ if(TARGET wang18_point_based OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_
     ARGS "--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/wang18_point_based"
     CHECKS "abs(rel_diff_total) <= 0.05;abs(rel_diff_multiple) <= 0.05;abs(rel_diff_single) < 1;abs(rel_diff_double) < 1;abs(rel_diff_bounced) < 1;speedup_equal_error > 0;speedup_equal_error < 1e9;vpt_variance_half_ratio > 0.7;vpt_variance_half_ratio < 1.3;abs(small_rel_diff_single) < 0.05;abs(small_rel_diff_double) < 0.05;small_bounced_share > 0.1;small_bounced_share < 0.4;abs(small_rel_diff_total) < 1;volume_samples > 100000"
     BAD_NAME wang18_point_based_bad_argument BAD_ARGS --vpt-spp 12)
+  # The isolation options of the bounced term's study (docs/wang18.md): bad values exit non-zero.
+  add_test(NAME wang18_point_based_bad_table COMMAND $<TARGET_FILE:wang18_point_based> --table medium)
+  add_test(NAME wang18_point_based_bad_k_max COMMAND $<TARGET_FILE:wang18_point_based> --k-max 0)
+  set_tests_properties(wang18_point_based_bad_table wang18_point_based_bad_k_max
+                       PROPERTIES WILL_FAIL TRUE LABELS "example;point_based")
 endif()
 
 # wang18_table3_materials at quick quality: every material's equal-error speed-up, bias with its
