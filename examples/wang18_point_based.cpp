@@ -272,6 +272,8 @@ int main(int argc, char** argv) {
             const std::string table_quality = ex.opt<std::string>(
                 "table", "quick", "full",
                 "the MS table's resolution and particle count: quick (48 x 96 x 12 x 6, 2e5) or full (96 x 192 x 18 x 9, 2e6)");
+            const long long table_photons_opt = ex.opt<long long>(
+                "table-photons", 0, 0, "the MS table's particle count; 0 = the --table value's (2e5 or 2e6), else in [1000, 1e9]");
             prm.bounce_generations =
                 ex.opt<int>("bounce-generations", 2, "reflections carried by the bounced term: 1 (Eq. 8 as in the paper) or 2");
             const bool study = ex.opt<bool>(
@@ -303,6 +305,9 @@ int main(int argc, char** argv) {
                                              " must be in [1, 4096]");
             if (table_quality != "quick" && table_quality != "full")
                 throw gl_examples::cli_error("--table = " + table_quality + " must be quick or full");
+            if (table_photons_opt != 0 && (table_photons_opt < 1000 || table_photons_opt > 1000000000))
+                throw gl_examples::cli_error("--table-photons = " + std::to_string(table_photons_opt) +
+                                             " must be 0 or in [1000, 1e9]");
             if (prm.bounce_generations < 1 || prm.bounce_generations > 2)
                 throw gl_examples::cli_error("--bounce-generations = " + std::to_string(prm.bounce_generations) +
                                              " must be 1 or 2");
@@ -320,7 +325,7 @@ int main(int argc, char** argv) {
             to.rho_max = 10;
             to.z_min = -10;
             to.z_max = 10;
-            to.photons = full_table ? 2000000 : 200000;
+            to.photons = table_photons_opt != 0 ? std::uint64_t(table_photons_opt) : (full_table ? 2000000u : 200000u);
             to.seed = prm.seed;
             const auto table_path = out / ("wang18_ms_table_g0.7_bmps_" + std::to_string(to.n_rho) + "x" +
                                            std::to_string(to.n_z) + "x" + std::to_string(to.n_theta) + "x" +

@@ -19,7 +19,8 @@ if(TARGET wang18_point_based OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_
   # The isolation options of the bounced term's study (docs/wang18.md): bad values exit non-zero.
   add_test(NAME wang18_point_based_bad_table COMMAND $<TARGET_FILE:wang18_point_based> --table medium)
   add_test(NAME wang18_point_based_bad_k_max COMMAND $<TARGET_FILE:wang18_point_based> --k-max 0)
-  set_tests_properties(wang18_point_based_bad_table wang18_point_based_bad_k_max
+  add_test(NAME wang18_point_based_bad_table_photons COMMAND $<TARGET_FILE:wang18_point_based> --table-photons 5)
+  set_tests_properties(wang18_point_based_bad_table wang18_point_based_bad_k_max wang18_point_based_bad_table_photons
                        PROPERTIES WILL_FAIL TRUE LABELS "example;point_based")
 endif()
 
