@@ -205,7 +205,8 @@ inline gl::MsTable<3> cached_table(const std::filesystem::path& dir, const Bumpy
     std::snprintf(gbuf, sizeof gbuf, "%.3f", double(sc.g));
     const auto path = dir / ("wang18_ms_table_g" + std::string(gbuf) + "_bmps_" + std::to_string(to.n_rho) + "x" +
                              std::to_string(to.n_z) + "x" + std::to_string(to.n_theta) + "x" + std::to_string(to.n_phi) +
-                             "_" + std::to_string(to.photons) + "_s" + std::to_string(seed) + ".bin");
+                             "_" + std::to_string(to.photons) + "_s" + std::to_string(seed) + "_v" +
+                             std::to_string(gl::ms_table_estimator_version) + ".bin");
     const double c0 = cpu_seconds();
     gl::MsTable<3> table;
     cached = false;

@@ -324,8 +324,9 @@ int main(int argc, char** argv) {
             to.photons = std::uint64_t(photons);
             to.seed = seed;
             char key[160];
-            std::snprintf(key, sizeof key, "wang18_fig20_ms_table_g%.3f_%dx%dx%dx%d_r%g_z%g_%g_%d_s%llu.bin", g, n_rho, n_z, n_theta,
-                          n_phi, rho_max, z_min, z_max, photons, (unsigned long long)seed);
+            std::snprintf(key, sizeof key, "wang18_fig20_ms_table_g%.3f_%dx%dx%dx%d_r%g_z%g_%g_%d_s%llu_v%d.bin", g, n_rho, n_z,
+                          n_theta, n_phi, rho_max, z_min, z_max, photons, (unsigned long long)seed,
+                          gl::ms_table_estimator_version);
             double c0 = wang18::cpu_seconds();
             gl::MsTable<3> table;
             bool cached = false;

@@ -330,7 +330,8 @@ int main(int argc, char** argv) {
             const auto table_path = out / ("wang18_ms_table_g0.7_bmps_" + std::to_string(to.n_rho) + "x" +
                                            std::to_string(to.n_z) + "x" + std::to_string(to.n_theta) + "x" +
                                            std::to_string(to.n_phi) + "_" + std::to_string(to.photons) + "_s" +
-                                           std::to_string(prm.seed) + ".bin");
+                                           std::to_string(prm.seed) + "_v" +
+                                           std::to_string(gl::ms_table_estimator_version) + ".bin");
             const double c0 = cpu_seconds();
             gl::MsTable<3> table;
             bool cached = false;

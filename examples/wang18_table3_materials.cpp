@@ -131,7 +131,8 @@ struct Result {
 std::string table_key(const Material& m, const gl::MsTableOptions& to) {
     std::ostringstream os;
     os << "wang18_ms_table_" << m.key << "_g" << m.g << "_" << to.n_rho << "x" << to.n_z << "x" << to.n_theta << "x"
-       << to.n_phi  << "_r" << to.rho_max << "_e" << to.escape_radius << "_" << to.photons << "_s" << to.seed << ".bin";
+       << to.n_phi  << "_r" << to.rho_max << "_e" << to.escape_radius << "_" << to.photons << "_s" << to.seed << "_v"
+       << gl::ms_table_estimator_version << ".bin";
     return os.str();
 }
 
