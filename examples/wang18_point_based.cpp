@@ -73,6 +73,7 @@ struct Params {
     bool full = false;
     int vpt_spp = 512, n_surface = 6000, bounce_generations = 2, bounce_samples = 512;
     int k_max = 6, bounce_rays = 4, bounce_k_max = 3;  ///< camera samples per ray (Eq. 10), the bounce gather's rays and samples
+    gl::BounceReflection bounce_reflection = gl::BounceReflection::specular;  ///< how bounce samples store reflected light
     double eps1 = 0.2;        ///< Alg. 1 solid-angle threshold (sr), thick case (Table 3's 0.2 for BmpS.)
     double small_eps1 = 1.0;  ///< the same for the small sphere (reported, not bounded)
     std::uint64_t seed = 1;
@@ -125,6 +126,7 @@ CaseResult run_case(const gl_examples::Example& ex, const Case& cs, const gl::Ms
     po.bounce_rays = prm.bounce_rays;
     po.bounce_k_max = prm.bounce_k_max;
     po.bounce_generations = prm.bounce_generations;
+    po.bounce_reflection = prm.bounce_reflection;
     double c0 = cpu_seconds();
     gl::Rng lrng = gl::Rng::from_key(seed, 0x5742u);
     const int n_surf = thick && !full ? 2 * prm.n_surface : prm.n_surface;
@@ -276,6 +278,10 @@ int main(int argc, char** argv) {
                 "table-photons", 0, 0, "the MS table's particle count; 0 = the --table value's (2e5 or 2e6), else in [1000, 1e9]");
             prm.bounce_generations =
                 ex.opt<int>("bounce-generations", 2, "reflections carried by the bounced term: 1 (Eq. 8 as in the paper) or 2");
+            const std::string reflection = ex.opt<std::string>(
+                "bounce-reflection", "specular",
+                "how the bounce samples store the light they reflect: specular (the Fresnel lobe and the gather rays' "
+                "mirror images) or diffuse (the paper's)");
             const bool study = ex.opt<bool>(
                 "bias-study", false, "flag: the multiple-scattering bias study (optical radius 2, 5, 20, 50), docs/wang18.md");
             ex.checkpointable();
@@ -303,6 +309,10 @@ int main(int argc, char** argv) {
             if (prm.bounce_k_max < 1 || prm.bounce_k_max > 4096)
                 throw gl_examples::cli_error("--bounce-k-max = " + std::to_string(prm.bounce_k_max) +
                                              " must be in [1, 4096]");
+            if (reflection != "specular" && reflection != "diffuse")
+                throw gl_examples::cli_error("--bounce-reflection = " + reflection + " must be specular or diffuse");
+            prm.bounce_reflection =
+                reflection == "diffuse" ? gl::BounceReflection::diffuse : gl::BounceReflection::specular;
             if (table_quality != "quick" && table_quality != "full")
                 throw gl_examples::cli_error("--table = " + table_quality + " must be quick or full");
             if (table_photons_opt != 0 && (table_photons_opt < 1000 || table_photons_opt > 1000000000))
@@ -400,6 +410,7 @@ int main(int argc, char** argv) {
 
             gl_examples::Json j = ex.summary();
             j.integer("vpt_spp", prm.vpt_spp).integer("surface_samples", prm.n_surface);
+            j.str("bounce_reflection", reflection);
             wang18::put_rank_rows(ex, j, full ? 96 : 40);
             j.num("seconds_table", cpu_table);
             auto put = [&](const std::string& p, const CaseResult& r) {

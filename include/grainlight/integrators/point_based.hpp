@@ -38,10 +38,12 @@
 ///  - multiple (Eq. 7) at P_k, same cut: sigma_s w_i sigma_t^3 L_o(rho sigma_t, z sigma_t, -omega)
 ///    from an MsTable (integrators/ms_table.hpp; built by precompute/ms_table.hpp) per channel.
 ///  - bounced (Sec. 3.5.5, Eq. 8) at P_k: `bounce_samples` surface samples store the light that
-///    reaches them from inside times the inside Fresnel reflectance as a diffuse exitance M_j;
-///    sigma_s sum_j (M_j / pi) Omega_j exp(-sigma_t q_j) p(q^_j, -omega) over their own octree and
-///    Alg. 1 cut (Omega_j: the solid angle of the sample, bounded by that of a disk of its area),
-///    plus Eqs. 6 and 7 from secondary volume samples along inward rays from the surface samples
+///    reaches them from inside times the inside Fresnel reflectance as an exitance M_j;
+///    sigma_s sum_j (M_j / pi) f(cos_j) Omega_j exp(-sigma_t q_j) p(q^_j, -omega) over their own
+///    octree and Alg. 1 cut (Omega_j: the solid angle of the sample, bounded by that of a disk of
+///    its area; f = 1 for the paper's diffuse storage, the Fresnel lobe F_in / F_dr for the
+///    default specular one, BounceReflection), plus Eqs. 6 and 7 from secondary volume samples
+///    along rays from the surface samples (cosine-distributed, or the gather rays' mirror images)
 ///    (the events after the first one that follows the reflection); `bounce_generations` = 2 adds
 ///    the light reflected twice (see build_bounce_samples).
 ///  - full solution (Eq. 9): L = single + sum_k weight_k (double(P_k) + mult(P_k) + bounced(P_k)).
@@ -60,6 +62,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <type_traits>
 #include <vector>
@@ -172,6 +175,21 @@ template <std::floating_point F>
     return out;
 }
 
+/// How a bounce surface sample stores the light it reflects back into the medium (Sec. 3.5.5).
+enum class BounceReflection : std::uint8_t {
+    /// The paper's: a diffuse exitance M_j. Eq. 8 emits a cosine lobe (radiance M_j / pi) and the
+    /// secondary samples leave along cosine-distributed rays, each carrying A_j M_j / bounce_rays.
+    diffuse,
+    /// Specular Fresnel reflection (our refinement, same cost). The secondary samples leave along
+    /// the mirror images of the gather rays, each carrying the light that ray brought in times its
+    /// Fresnel reflectance (so together A_j M_j, as in `diffuse`); Eq. 8 emits the lobe of an
+    /// isotropic inside radiance reflected by Fresnel, M_j F_in(cos) / (pi F_dr) with F_dr the
+    /// hemispherical mean of F_in. Internal reflection is strongest at grazing angles (total beyond
+    /// the critical angle), so the reflected light enters shallower than a cosine lobe: on the
+    /// 20-mfp BmpS. sphere the diffuse storage left the bounced term 13 % low (docs/wang18.md).
+    specular,
+};
+
 /// Options of the point-based renderer (defaults follow the paper where it gives values).
 template <std::floating_point F>
 struct PointBasedOptions {
@@ -226,7 +244,10 @@ struct PointBasedOptions {
     /// Generations of Eq. 8 bounced light: 1 = light reflected once at the boundary; 2 = also twice
     /// (with bounce_series, the later generations as a geometric series).
     int bounce_generations = 2;
-    bool bounce_series = false;     ///< generation 2: sum the later generations as a geometric series     ///< 1: light reflected once; 2: + twice, later ones as a series
+    bool bounce_series = false;     ///< generation 2: sum the later generations as a geometric series
+    /// How the bounce samples store the reflected light: `specular` (default) or the paper's
+    /// `diffuse` (see BounceReflection).
+    BounceReflection bounce_reflection = BounceReflection::specular;
     int leaf_items = 8;             ///< octree leaf size (paper: 8)
     /// Tree cuts skip the nodes farther from the receiver than the reach of every kernel (not in
     /// the paper; a saving, not an approximation of Eqs. 6-8 beyond this transmittance): the
@@ -351,6 +372,7 @@ public:
                        opt.bounce_rays, "[1, 1024]");
         check_argument(opt.bounce_k_max >= 1 && opt.bounce_k_max <= 4096, "PointBasedRenderer", "bounce_k_max",
                        opt.bounce_k_max, "[1, 4096]");
+        bounce_fdr_ = fresnel_diffuse_reflectance(eta_);
         set_reach();
         build_samples(surface, light, rng);
         if (opt.bounced && opt.bounce_samples > 0) {
@@ -618,7 +640,7 @@ public:
             const F x = area * cj / (pi_v<F> * r * r);
             const F omega_s = x < F(1e-3) ? area * cj / (r * r) * (F(1) - F(0.75) * x)
                                           : F(2) * pi_v<F> * (F(1) - F(1) / std::sqrt(F(1) + x));
-            acc += ws * (omega_s / area) * medium_.transmittance(r) * ph.eval(qh, to_cam).value;
+            acc += ws * (omega_s / area * bounce_lobe(cj)) * medium_.transmittance(r) * ph.eval(qh, to_cam).value;
         };
         CutCriterion<F> cut_r = cut;
         if (opt_.cull_optical_distance > F(0)) cut_r.max_distance = std::min(cut.max_distance, reach_kernel_);
@@ -656,6 +678,13 @@ public:
             });
         return medium_.sigma_s() * acc;
     }
+    /// Radiance of a bounce sample's reflected light at cosine `cos_in` to its inward normal,
+    /// relative to the diffuse lobe's M_j / pi: 1 for BounceReflection::diffuse, F_in(cos_in) /
+    /// F_dr for `specular` (integrates to 1 against cos over the hemisphere).
+    [[nodiscard]] F bounce_lobe(F cos_in) const noexcept {
+        if (opt_.bounce_reflection == BounceReflection::diffuse || !(bounce_fdr_ > F(0))) return F(1);
+        return fresnel_dielectric(-cos_in, eta_) / bounce_fdr_;
+    }
     /// Eq. 8 summed over every bounce surface sample individually (tests, reference).
     [[nodiscard]] S gather_bounced_brute_force(const Vec3<F>& P, const Vec3<F>& omega) const noexcept {
         CutCriterion<F> c;
@@ -674,6 +703,11 @@ public:
     }
 
 private:
+    /// A bounce sample's gather ray reflected at the boundary (BounceReflection::specular).
+    struct BounceRay {
+        Vec3<F> o{F(0)}, d{F(0), F(0), F(1)};  ///< origin (just inside) and inward direction
+        S power{F(0)};                         ///< reflected power A_j (pi / nr) L F
+    };
     /// Reach of the kernels (PointBasedOptions::cull_optical_distance): Eqs. 6 and 8 to that
     /// optical distance in the least-extinguished channel; the table to its grid's farthest
     /// point (sqrt(rho_max^2 + max(z_min^2, z_max^2)) mean free paths, the longest channel's),
@@ -787,10 +821,12 @@ private:
             bs[i].area *= area_scale;
         }
         (void)rng;
-        std::vector<S> M1 = gather_at_surface(bs, true, false);
-        set_bounce_sources(bs, M1);
+        const bool specular = opt_.bounce_reflection == BounceReflection::specular;
+        std::vector<BounceRay> rays1, rays2;
+        std::vector<S> M1 = gather_at_surface(bs, true, false, specular ? &rays1 : nullptr);
+        set_bounce_sources(bs, M1, specular ? &rays1 : nullptr);
         if (opt_.bounce_generations >= 2) {
-            const std::vector<S> M2 = gather_at_surface(bs, false, true);
+            const std::vector<S> M2 = gather_at_surface(bs, false, true, specular ? &rays2 : nullptr);
             S s1(F(0)), s2(F(0));
             for (std::size_t i = 0; i < bs.size(); ++i) {
                 s1 += M1[i] * bs[i].area;
@@ -803,7 +839,12 @@ private:
                 bounce_ratio_[c] = r;
             }
             for (std::size_t i = 0; i < bs.size(); ++i) M1[i] += opt_.bounce_series ? M2[i] * geo : M2[i];
-            set_bounce_sources(bs, M1);
+            if (specular) {
+                for (BounceRay& b : rays2)
+                    if (opt_.bounce_series) b.power *= geo;
+                rays1.insert(rays1.end(), rays2.begin(), rays2.end());
+            }
+            set_bounce_sources(bs, M1, specular ? &rays1 : nullptr);
         }
     }
 
@@ -823,9 +864,14 @@ private:
 
     /// Reflected exitance M_j at each surface sample of the light gathered from inside (the
     /// primary field and/or the bounced field).
-    std::vector<S> gather_at_surface(const std::vector<SurfaceSample<F>>& bs, bool primary, bool bounced) const {
+    /// With `rays`: also each gather ray's reflection (index sample nr + ray): the mirror image of
+    /// the ray about the boundary at its origin, carrying A_j (pi / nr) L F, the ray's share of
+    /// A_j M_j (zero power where the ray found no boundary).
+    std::vector<S> gather_at_surface(const std::vector<SurfaceSample<F>>& bs, bool primary, bool bounced,
+                                     std::vector<BounceRay>* rays = nullptr) const {
         std::vector<S> M(bs.size(), S(F(0)));
         const int nr = opt_.bounce_rays;
+        if (rays) rays->assign(bs.size() * std::size_t(nr), BounceRay{});
 #if defined(_OPENMP)
 #pragma omp parallel for schedule(dynamic, 16)
 #endif
@@ -847,7 +893,16 @@ private:
                 PointBasedComponents<S> c;
                 gather_segment(o, w, te, S(F(1)), r, c, opt_.bounce_k_max, primary, bounced);
                 // Light arriving along -w hits the boundary from inside at cosine wl.z.
-                acc += c.total() * fresnel_dielectric(-wl.z, eta_);
+                const S reflected = c.total() * fresnel_dielectric(-wl.z, eta_);
+                acc += reflected;
+                if (rays) {
+                    BounceRay& b = (*rays)[std::size_t(ii) * std::size_t(nr) + std::size_t(k)];
+                    // The light arrived along -w; its mirror image about the tangent plane goes
+                    // inward along -w + 2 (w . n) n (n outward).
+                    b.d = glm::normalize(F(2) * glm::dot(w, ns) * ns - w);
+                    b.o = offset_ray_origin(ps, -ns, b.d);
+                    b.power = reflected * (s.area * pi_v<F> / F(nr));
+                }
             }
             M[std::size_t(ii)] = acc * (pi_v<F> / F(nr));  // int L F cos d omega, cosine-sampled
         }
@@ -856,7 +911,8 @@ private:
 
     /// Surface tree (Eq. 8: I_j = A_j M_j / pi along the inward normal) and secondary volume
     /// samples (power A_j M_j / bounce_rays along each cosine-distributed inward ray).
-    void set_bounce_sources(const std::vector<SurfaceSample<F>>& bs, const std::vector<S>& M) {
+    void set_bounce_sources(const std::vector<SurfaceSample<F>>& bs, const std::vector<S>& M,
+                            const std::vector<BounceRay>* rays = nullptr) {
         std::vector<Item> items(bs.size());
         std::vector<Item> sec;
         const int nr = opt_.bounce_rays;
@@ -870,7 +926,7 @@ private:
             it.extent = Aabb<F>(s.p, s.p);
             it.id = std::uint32_t(i);
             items[i] = it;
-            if (M[i].max_value() <= F(0) || !opt_.bounce_secondary) continue;
+            if (rays || M[i].max_value() <= F(0) || !opt_.bounce_secondary) continue;
             Rng r = Rng::from_key(0x5345434fu, std::uint64_t(i));
             const S phi = M[i] * (s.area / F(nr));
             for (int k = 0; k < nr; ++k) {
@@ -889,6 +945,27 @@ private:
                     v.p = o + u0 * w;
                     v.d = w;
                     v.w = phi * medium_.transmittance(u0) * step_;
+                    v.extent = Aabb<F>(v.p, v.p);
+                    v.id = std::uint32_t(sec.size());
+                    sec.push_back(v);
+                }
+            }
+        }
+        if (rays && opt_.bounce_secondary) {
+            // Specular storage: each gather ray's reflection, volume samples every Delta (jittered).
+            for (std::size_t k = 0; k < rays->size(); ++k) {
+                const BounceRay& b = (*rays)[k];
+                if (b.power.max_value() <= F(0)) continue;
+                F te;
+                Vec3<F> ne;
+                if (!boundary_.intersect(Ray<F>(b.o, b.d), te, ne)) continue;
+                const F len = std::min(te, max_len);
+                Rng r = Rng::from_key(0x5345434fu, std::uint64_t(k), 3u);
+                for (F u0 = r.uniform<F>() * step_; u0 < len; u0 += step_) {
+                    Item v;
+                    v.p = b.o + u0 * b.d;
+                    v.d = b.d;
+                    v.w = b.power * medium_.transmittance(u0) * step_;
                     v.extent = Aabb<F>(v.p, v.p);
                     v.id = std::uint32_t(sec.size());
                     sec.push_back(v);
@@ -1011,6 +1088,7 @@ private:
     Octree<F, S> surf_tree_;
     Octree<F, S> sec_tree_;
     S bounce_ratio_{0};
+    F bounce_fdr_ = F(0);  ///< hemispherical mean of the inside Fresnel reflectance (specular lobe)
     F bounce_area_ = F(1);  ///< mean area of a bounce surface sample
     std::vector<Box> boxes_;
     std::vector<F> k_;
