@@ -5,9 +5,13 @@
 /// Spectral free-flight sampling without bias: a channel c is chosen uniformly, the distance is
 /// drawn from sigma_t[c] exp(-sigma_t[c] t), and the sample is weighted by the one-sample MIS
 /// (balance) pdf averaged over channels (the "hero"/spectral-MIS estimator). The collision is then
-/// split into scatter/absorb by Russian roulette on the mean scatter weight. For a grey medium
-/// every weight is exactly 1 and events happen with the analog probabilities (albedo for
-/// scatter).
+/// split into scatter/absorb by Russian roulette on the largest channel's scatter weight w_max
+/// (capped at 1): channel c then carries w_c / w_max <= 1, and its second moment per event,
+/// w_c^2 / w_max <= w_c, stays below its mean. (Roulette on the mean weight, used before
+/// 2026-12-06, gave a channel above the mean a factor w_c / mean > 1 per event and, where w_c^2 >
+/// mean, a variance that grows geometrically with the path length: albedos (0.95, 0.68, 0.46)
+/// made the red channel's per-event second moment 1.31.) For a grey medium every weight is
+/// exactly 1 and events happen with the analog probabilities (albedo for scatter).
 #pragma once
 
 #include <algorithm>
@@ -24,7 +28,7 @@ namespace grainlight {
 /// Homogeneous medium of the radiative transfer equation: extinction sigma_t and albedo per
 /// channel and one phase function. Free flights are sampled analogously in one channel chosen
 /// uniformly (spectral MIS weights in Interaction::weight when channels differ), absorption by
-/// Russian roulette on the mean collision weight. Immutable; thread-safe for queries (the Rng is
+/// Russian roulette on the largest channel's collision weight. Immutable; thread-safe for queries (the Rng is
 /// the caller's). Models Medium and PhaseMedium.
 template <PhaseFunction Phase, SpectrumType S = typename Phase::Spectrum>
 class ContinuousMedium {
@@ -106,7 +110,7 @@ public:
             const S dens = sigma_t_ * tr;
             w_scatter = sigma_s() * tr / dens.average();
         }
-        const F q = std::min(F(1), w_scatter.average());
+        const F q = std::min(F(1), w_scatter.max_value());
         if (q > F(0) && rng.uniform<F>() < q) {
             it.kind = EventKind::scatter;
             it.weight = w_scatter / q;

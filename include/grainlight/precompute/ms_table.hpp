@@ -13,11 +13,12 @@
 /// largest albedo alpha_max (a collision scatters with probability alpha_max, every channel
 /// shares the flights: sigma_t = 1 in all of them), and the k-th event of a path counts
 /// (alpha_c / alpha_max)^k in channel c, an unbiased weight of alpha_c^k that never exceeds 1.
-/// (ContinuousMedium's own collision roulette survives with the mean albedo and weights channel
-/// c by alpha_c / mean: a channel of albedo above the mean then gains a factor per event whose
-/// square over the survival probability exceeds 1, so the variance of that channel grows
-/// geometrically with the path length; for BmpS. (0.95, 0.68, 0.46) the red table's total moved
-/// by 25 % between seeds at 2e5 particles.) The incoming-direction histograms are convolved with the phase function
+/// (Until 2026-12-06 the builder used ContinuousMedium's collision roulette as it then was,
+/// surviving with the mean albedo and weighting channel c by alpha_c / mean: a channel of albedo
+/// above the mean gained a factor per event whose square over the survival probability exceeds 1,
+/// so its variance grew geometrically with the path length; for BmpS. (0.95, 0.68, 0.46) the red
+/// table's total moved by 25 % between seeds at 2e5 particles. The medium's roulette now survives
+/// with the largest weight too; the builder does not depend on it.) The incoming-direction histograms are convolved with the phase function
 /// after the walk (a precomputed bin-to-bin phase matrix, averaged over the two mirror images of
 /// a bin) and divided by the cell volume and the photon count. Particles farther than
 /// `escape_radius` mean free paths from the origin are dropped (they rarely return).
