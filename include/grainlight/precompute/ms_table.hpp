@@ -7,18 +7,17 @@
 ///
 /// Simulation (units of the mean free path): a unit of power is scattered at the origin by light
 /// travelling along +z (the phase function picks the first direction); particles then propagate
-/// in an infinite medium with the library's walk kernel (integrators/walk.hpp) and
-/// ContinuousMedium. Every scattering event after the first collision is histogrammed by cell
-/// and incoming direction, weighted by the power it scatters. The walk is the analog one of the
-/// largest albedo alpha_max (a collision scatters with probability alpha_max, every channel
-/// shares the flights: sigma_t = 1 in all of them), and the k-th event of a path counts
-/// (alpha_c / alpha_max)^k in channel c, an unbiased weight of alpha_c^k that never exceeds 1.
-/// (Until 2026-12-06 the builder used ContinuousMedium's collision roulette as it then was,
-/// surviving with the mean albedo and weighting channel c by alpha_c / mean: a channel of albedo
-/// above the mean gained a factor per event whose square over the survival probability exceeds 1,
-/// so its variance grew geometrically with the path length; for BmpS. (0.95, 0.68, 0.46) the red
-/// table's total moved by 25 % between seeds at 2e5 particles. The medium's roulette now survives
-/// with the largest weight too; the builder does not depend on it.) The incoming-direction histograms are convolved with the phase function
+/// in an infinite medium of albedo alpha_c per channel and sigma_t = 1 with the library's walk
+/// kernel (integrators/walk.hpp) and ContinuousMedium. Every scattering event after the first
+/// collision is histogrammed by cell and incoming direction, weighted by the power it scatters
+/// (the throughput at the event includes its albedo). The channels share the flights; a
+/// collision scatters with probability alpha_max, the largest albedo, so the k-th event of a path
+/// weighs (alpha_c / alpha_max)^k in channel c, never above 1 (ContinuousMedium's roulette).
+/// (Until 2026-12-06 that roulette survived with the mean albedo and weighted channel c by
+/// alpha_c / mean: a channel of albedo above the mean gained a factor per event whose square over
+/// the survival probability exceeds 1, so its variance grew geometrically with the path length;
+/// for BmpS. (0.95, 0.68, 0.46) the red table's total moved by 25 % between seeds at 2e5
+/// particles.) The incoming-direction histograms are convolved with the phase function
 /// after the walk (a precomputed bin-to-bin phase matrix, averaged over the two mirror images of
 /// a bin) and divided by the cell volume and the photon count. Particles farther than
 /// `escape_radius` mean free paths from the origin are dropped (they rarely return).
@@ -191,8 +190,6 @@ struct MsTableEventTally {
     double* weight = nullptr;
     double* weight2 = nullptr;
     double escape2 = 0;
-    /// alpha_c / alpha_max per channel: the k-th event weighs ratio_c^k (see the file comment).
-    std::array<double, N> ratio{};
     // Per-particle sums per cell (with `weight`): the cells the current particle touched and its
     // deposits there, squared into weight2 at end_particle().
     std::vector<double> particle_sum;
@@ -211,7 +208,7 @@ struct MsTableEventTally {
             for (std::size_t c = 0; c < N && first; ++c) first = particle_sum[cell * N + c] == 0.0;
         }
         for (std::size_t c = 0; c < N; ++c) {
-            const double w = double(st.throughput[c]) * (ratio[c] == 1.0 ? 1.0 : std::pow(ratio[c], st.depth));
+            const double w = double(st.throughput[c]);
             if (shared) {
                 const auto q = std::uint64_t(std::llround(w * ms_table_fixed_scale));
                 std::atomic_ref<std::uint64_t>(shared[i0 + c * stride]).fetch_add(q, std::memory_order_relaxed);
@@ -413,12 +410,7 @@ void ms_table_trace_blocks(const Phase& phase, const Spectrum<N, typename Phase:
     using F = typename Phase::Float;
     using S = Spectrum<N, F>;
     using Medium = ContinuousMedium<Phase, S>;
-    // The analog walk of the largest albedo; the tally weighs the others (see the file comment).
-    F alpha_max = F(0);
-    for (std::size_t c = 0; c < N; ++c) alpha_max = std::max(alpha_max, albedo[c]);
-    std::array<double, N> ratio{};
-    for (std::size_t c = 0; c < N; ++c) ratio[c] = alpha_max > F(0) ? double(albedo[c]) / double(alpha_max) : 0.0;
-    const Medium medium(S(F(1)), S(alpha_max), phase);
+    const Medium medium(S(F(1)), albedo, phase);
     const InfiniteMediumScene<Medium> scene{medium};
     const std::size_t n_all = N * shape.grid().cells() * shape.grid().directions();
     const std::size_t cells = shape.grid().cells();
@@ -434,7 +426,7 @@ void ms_table_trace_blocks(const Phase& phase, const Spectrum<N, typename Phase:
 #endif
     for (std::int64_t k = 0; k < n_blocks; ++k) {
         const std::uint64_t b = b0 + std::uint64_t(k);
-        MsTableEventTally<N, F, S> tally{shape, nullptr, nullptr, nullptr, nullptr, nullptr, 0.0, {}, {}, {}};
+        MsTableEventTally<N, F, S> tally{shape, nullptr, nullptr, nullptr, nullptr, nullptr, 0.0, {}, {}};
         if (hist) {
             (*hist)[std::size_t(k)].assign(n_all, 0.0);
             tally.h = &(*hist)[std::size_t(k)];
@@ -451,7 +443,6 @@ void ms_table_trace_blocks(const Phase& phase, const Spectrum<N, typename Phase:
             tally.touched.reserve(cells);  // a particle touches each cell once at most: no allocation in the walk
         }
         tally.escape2 = opt.escape_radius * opt.escape_radius;
-        tally.ratio = ratio;
         const std::uint64_t p0 = std::min(opt.photons, b * per_block);
         const std::uint64_t p1 = std::min(opt.photons, p0 + per_block);
         ms_table_walk_particles(scene, phase, opt, p0, p1, tally);
