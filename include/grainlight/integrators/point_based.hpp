@@ -840,8 +840,8 @@ private:
             }
             for (std::size_t i = 0; i < bs.size(); ++i) M1[i] += opt_.bounce_series ? M2[i] * geo : M2[i];
             if (specular) {
-                for (BounceRay& b : rays2)
-                    if (opt_.bounce_series) b.power *= geo;
+                if (opt_.bounce_series)
+                    for (BounceRay& b : rays2) b.power *= geo;
                 rays1.insert(rays1.end(), rays2.begin(), rays2.end());
             }
             set_bounce_sources(bs, M1, specular ? &rays1 : nullptr);
@@ -909,8 +909,30 @@ private:
         return M;
     }
 
+    /// Secondary volume samples along the ray (o, w) inside the boundary, up to max_len: one every
+    /// Delta (the first jittered with `rng`), each holding power T(u) Delta (no-op if the ray
+    /// finds no boundary).
+    void add_secondary_samples(const Vec3<F>& o, const Vec3<F>& w, const S& power, F max_len, Rng& rng,
+                               std::vector<Item>& sec) const {
+        F te;
+        Vec3<F> ne;
+        if (!boundary_.intersect(Ray<F>(o, w), te, ne)) return;
+        const F len = std::min(te, max_len);
+        for (F u0 = rng.uniform<F>() * step_; u0 < len; u0 += step_) {
+            Item v;
+            v.p = o + u0 * w;
+            v.d = w;
+            v.w = power * medium_.transmittance(u0) * step_;
+            v.extent = Aabb<F>(v.p, v.p);
+            v.id = std::uint32_t(sec.size());
+            sec.push_back(v);
+        }
+    }
+
     /// Surface tree (Eq. 8: I_j = A_j M_j / pi along the inward normal) and secondary volume
-    /// samples (power A_j M_j / bounce_rays along each cosine-distributed inward ray).
+    /// samples: without `rays` (diffuse storage) power A_j M_j / bounce_rays along each of
+    /// bounce_rays cosine-distributed inward rays; with them (specular storage) along each ray of
+    /// `rays` with its own power.
     void set_bounce_sources(const std::vector<SurfaceSample<F>>& bs, const std::vector<S>& M,
                             const std::vector<BounceRay>* rays = nullptr) {
         std::vector<Item> items(bs.size());
@@ -935,41 +957,16 @@ private:
                 const Frame<F> fk(-ns);
                 const Vec2<F> u2 = r.uniform2<F>();
                 const Vec3<F> w = glm::normalize(fk.to_world(sample_cosine_hemisphere(Vec2<F>((F(k) + u2.x) / F(nr), u2.y))));
-                const Vec3<F> o = offset_ray_origin(ps, -ns, w);
-                F te;
-                Vec3<F> ne;
-                if (!boundary_.intersect(Ray<F>(o, w), te, ne)) continue;
-                const F len = std::min(te, max_len);
-                for (F u0 = r.uniform<F>() * step_; u0 < len; u0 += step_) {
-                    Item v;
-                    v.p = o + u0 * w;
-                    v.d = w;
-                    v.w = phi * medium_.transmittance(u0) * step_;
-                    v.extent = Aabb<F>(v.p, v.p);
-                    v.id = std::uint32_t(sec.size());
-                    sec.push_back(v);
-                }
+                add_secondary_samples(offset_ray_origin(ps, -ns, w), w, phi, max_len, r, sec);
             }
         }
         if (rays && opt_.bounce_secondary) {
-            // Specular storage: each gather ray's reflection, volume samples every Delta (jittered).
+            // Specular storage: each gather ray's reflection.
             for (std::size_t k = 0; k < rays->size(); ++k) {
                 const BounceRay& b = (*rays)[k];
                 if (b.power.max_value() <= F(0)) continue;
-                F te;
-                Vec3<F> ne;
-                if (!boundary_.intersect(Ray<F>(b.o, b.d), te, ne)) continue;
-                const F len = std::min(te, max_len);
                 Rng r = Rng::from_key(0x5345434fu, std::uint64_t(k), 3u);
-                for (F u0 = r.uniform<F>() * step_; u0 < len; u0 += step_) {
-                    Item v;
-                    v.p = b.o + u0 * b.d;
-                    v.d = b.d;
-                    v.w = b.power * medium_.transmittance(u0) * step_;
-                    v.extent = Aabb<F>(v.p, v.p);
-                    v.id = std::uint32_t(sec.size());
-                    sec.push_back(v);
-                }
+                add_secondary_samples(b.o, b.d, b.power, max_len, r, sec);
             }
         }
         bounce_area_ = F(0);
