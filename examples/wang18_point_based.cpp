@@ -260,7 +260,7 @@ int main(int argc, char** argv) {
         "out/wang18_point_based", [&](gl_examples::Example& ex) -> int {
             Params prm;
             prm.vpt_spp = ex.opt<int>("vpt-spp", 512, 4096, "VPT samples per pixel and channel, multiple of 8");
-            prm.n_surface = ex.opt<int>("surface-samples", 6000, 20000,
+            prm.n_surface = ex.opt<int>("surface-samples", 12000, 20000,
                                         "light surface samples on the sphere (the thick case uses twice as many at quick)");
             prm.eps1 = ex.opt<double>("eps1", 0.2, 0.2,
                                       "Alg. 1 solid-angle threshold eps1 in sr of the thick case (Table 3: 0.2 for BmpS.), "
