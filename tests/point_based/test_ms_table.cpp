@@ -55,6 +55,113 @@ TEST_CASE("ms_table: total emission of orders >= 2 is alpha^2 / (1 - alpha)", "[
     CHECK(t.eval(0, 13.0, 0.0, 0.0, 0.0) == 0.0);
 }
 
+TEST_CASE("ms_table: the phase matrix is the bin average of the phase function and conserves power", "[ms_table]") {
+    // Row i of the bin-to-bin phase matrix is the phase function per steradian, averaged over the
+    // incoming bin i (both mirror images) and over each outgoing bin: its integral over the
+    // outgoing bins is the phase function's norm, 1, however narrow the lobe. (The matrix read at
+    // the bin centres, p(c_i, c_j), which the builder used until 2026-12-06, has rows integrating
+    // to 4.2-18.8 at g = 0.95 and 1.25-2.5 at g = 0.9 on these grids, 1.00-1.03 at g = 0.7.)
+    for (const float g : {0.0f, 0.7f, 0.95f}) {
+        for (const auto& nt_np : {std::pair<int, int>{8, 4}, std::pair<int, int>{12, 6}}) {
+            MsTableGrid grid;
+            grid.n_rho = 2;
+            grid.n_z = 2;
+            grid.n_theta = std::uint32_t(nt_np.first);
+            grid.n_phi = std::uint32_t(nt_np.second);
+            const auto shape = MsTable<1>::layout(grid, {0.5}, g, 1);
+            const HenyeyGreenstein<float, Grey> ph(g);
+            const std::vector<double> pm = detail::ms_table_phase_matrix(ph, shape);
+            const std::size_t nd = grid.directions();
+            double worst = 0;
+            for (std::size_t i = 0; i < nd; ++i) {
+                double row = 0;
+                for (std::size_t j = 0; j < nd; ++j) row += pm[i * nd + j] * ms_bin_solid_angle(grid, j);
+                worst = std::max(worst, std::abs(row - 1));
+            }
+            INFO("g = " << g << ", grid " << nt_np.first << " x " << nt_np.second);
+            CHECK(worst < 1e-5);
+        }
+    }
+    // Against an independent fine quadrature of the same average with the phase function's eval
+    // (incoming 12 x 12 x 2 mirrors, outgoing 96 x 48 x 2 mirrors per bin, midpoints equal in cos
+    // theta and phi), g = 0.7 on the 8 x 4 grid: every entry holding > 5 % of its row's power
+    // within 2 %, > 0.5 % within 5 % (the matrix draws 131 072 directions of the lobe per row, a
+    // shifted grid per incoming direction: an entry of 1 % gets ~1300 of them).
+    MsTableGrid grid;
+    grid.n_rho = 2;
+    grid.n_z = 2;
+    grid.n_theta = 8;
+    grid.n_phi = 4;
+    const auto shape = MsTable<1>::layout(grid, {0.5}, 0.7, 1);
+    const HenyeyGreenstein<float, Grey> ph(0.7f);
+    const std::vector<double> pm = detail::ms_table_phase_matrix(ph, shape);
+    const std::size_t nd = grid.directions();
+    auto dir = [&](std::size_t b, double fa, double fb, bool mirror) {
+        const std::size_t it = b / grid.n_phi, ip = b % grid.n_phi;
+        const double c0 = std::cos(pi_v<double> * double(it) / grid.n_theta), c1 = std::cos(pi_v<double> * double(it + 1) / grid.n_theta);
+        const double ct = c0 + (c1 - c0) * fa, st = std::sqrt(std::max(0.0, 1 - ct * ct));
+        const double phi = pi_v<double> * (double(ip) + fb) / grid.n_phi * (mirror ? -1.0 : 1.0);
+        return Vec3f(float(st * std::cos(phi)), float(st * std::sin(phi)), float(ct));
+    };
+    int compared = 0;
+    for (const std::size_t i : {std::size_t(0), std::size_t(9), std::size_t(14), std::size_t(30)}) {
+        for (std::size_t j = 0; j < nd; ++j) {
+            if (!(pm[i * nd + j] * ms_bin_solid_angle(grid, j) > 0.005)) continue;
+            double acc = 0;
+            int n = 0;
+            for (int a = 0; a < 12; ++a)
+                for (int b = 0; b < 12; ++b)
+                    for (int m = 0; m < 2; ++m) {
+                        const Vec3f wi = dir(i, (a + 0.5) / 12, (b + 0.5) / 12, m == 1);
+                        for (int u = 0; u < 96; ++u)
+                            for (int v = 0; v < 48; ++v)
+                                for (int m2 = 0; m2 < 2; ++m2) {
+                                    acc += double(ph.eval(wi, dir(j, (u + 0.5) / 96, (v + 0.5) / 48, m2 == 1)).value[0]);
+                                    ++n;
+                                }
+                    }
+            INFO("incoming bin " << i << ", outgoing bin " << j);
+            const double share = pm[i * nd + j] * ms_bin_solid_angle(grid, j);
+            CHECK(pm[i * nd + j] == Approx(acc / n).epsilon(share > 0.05 ? 0.02 : 0.05));
+            ++compared;
+        }
+    }
+    CHECK(compared >= 12);
+}
+
+TEST_CASE("ms_table: a narrow lobe (g = 0.95) emits the power its cells tallied", "[ms_table]") {
+    // Per cell and channel, the emitted power sum_j L_j Omega_j V equals the tallied power of the
+    // events there (MsTableBuildInfo::cell_weight, per source particle): the convolution with the
+    // phase function moves light between directions only. Also the closed form of the total,
+    // alpha^2 / (1 - alpha) for alpha = 0.5 (short walks: the grid keeps them).
+    MsTableOptions o;
+    o.n_rho = 8;
+    o.n_z = 16;
+    o.n_theta = 8;
+    o.n_phi = 4;
+    o.rho_max = 12;
+    o.z_min = -12;
+    o.z_max = 12;
+    o.photons = 20000;
+    MsTableBuildInfo info;
+    const auto t = build_ms_table(HenyeyGreenstein<float, Grey>(0.95f), Grey(0.5f), o, &info);
+    const MsTableGrid& g = t.grid();
+    double worst = 0, tallied = 0;
+    for (std::size_t iz = 0; iz < g.n_z; ++iz)
+        for (std::size_t ir = 0; ir < g.n_rho; ++ir) {
+            double emitted = 0;
+            for (std::size_t j = 0; j < g.directions(); ++j)
+                emitted += double(t.values()[t.value_index(0, iz, ir, j)]) * ms_bin_solid_angle(g, j);
+            emitted *= ms_cell_volume(g, ir);
+            const double w = info.cell_weight[iz * g.n_rho + ir] / double(o.photons);
+            tallied += w;
+            if (w > 1e-4) worst = std::max(worst, std::abs(emitted / w - 1));
+        }
+    CHECK(worst < 1e-4);
+    CHECK(t.total(0) == Approx(tallied).epsilon(1e-4));
+    CHECK(t.total(0) == Approx(0.5).epsilon(0.05));
+}
+
 TEST_CASE("ms_table: isotropic phase gives an isotropic emission lobe", "[ms_table]") {
     // Independent fact: with an isotropic phase function the in-scattered emission
     // sigma_s int p L d omega' does not depend on the outgoing direction.
@@ -68,9 +175,12 @@ TEST_CASE("ms_table: isotropic phase gives an isotropic emission lobe", "[ms_tab
     o.z_max = 4;
     o.photons = 4000;
     const auto t = MsTable<1>::build(HenyeyGreenstein<float, Grey>(0.0f), Grey(0.6f), o);
+    // The phase matrix is a quadrature of the bin averages that draws directions from the phase
+    // function (ms_table_phase_matrix): for an isotropic phase its bins agree to ~1e-3, not to
+    // the float rounding of a matrix of equal entries.
     const double a = t.eval(0, 1.0, 1.0, 1.0, 0.0), b = t.eval(0, 1.0, 1.0, -0.7, 2.0);
     CHECK(a > 0);
-    CHECK(a == Approx(b).epsilon(1e-5));
+    CHECK(a == Approx(b).epsilon(5e-3));
 }
 
 TEST_CASE("ms_table: save / load round trip and corrupt files", "[ms_table]") {
