@@ -24,23 +24,24 @@ using namespace pb_test;
 namespace {
 
 // Direct tally of the emission density L_o (table units: 1 / (l^3 sr) per unit source power) at
-// point X toward direction w (averaged over the directions ws): events of order >= 2 in a ball of
-// radius delta around X.
+// point X, one sum per set of directions (each averaged over its directions): events of order >= 2
+// in a ball of radius delta around X.
 struct BallTally {
     Vec3<double> X;
-    std::vector<Vec3<double>> ws;
+    std::vector<std::vector<Vec3<double>>> sets;
     double delta2;
     const Phase* phase;
-    double sum = 0;
+    std::vector<double> sums{};
     bool on_scatter(PathState<float, Grey>& st, const Interaction<float, Grey>& it, const MediumT&) noexcept {
         if (st.depth < 2) return true;
         const Vec3<double> p(it.p);
         const Vec3<double> d = p - X;
-        if (glm::dot(d, d) < delta2) {
-            double e = 0;
-            for (const auto& w : ws) e += double(phase->eval(st.ray.d, Vec3f(w)).value[0]);
-            sum += double(st.throughput[0]) * e / double(ws.size());
-        }
+        if (glm::dot(d, d) < delta2)
+            for (std::size_t k = 0; k < sets.size(); ++k) {
+                double e = 0;
+                for (const auto& w : sets[k]) e += double(phase->eval(st.ray.d, Vec3f(w)).value[0]);
+                sums[k] += double(st.throughput[0]) * e / double(sets[k].size());
+            }
         return glm::dot(p, p) < 24.0 * 24.0;
     }
 };
@@ -57,11 +58,13 @@ double inside_fresnel_mean() {
     return fdr;
 }
 
-double direct_emission(float albedo, float g, Vec3<double> X, std::vector<Vec3<double>> ws, double delta, int photons) {
+std::vector<double> direct_emission(float albedo, float g, Vec3<double> X, std::vector<std::vector<Vec3<double>>> sets,
+                                    double delta, int photons) {
     const Phase ph(g);
     const MediumT m(1.0f, albedo, ph);
     const InfiniteMediumScene<MediumT> scene{m};
-    BallTally t{X, std::move(ws), delta * delta, &ph};
+    BallTally t{X, std::move(sets), delta * delta, &ph};
+    t.sums.assign(t.sets.size(), 0.0);
     WalkOptions<float> wo;
     wo.mode = TransportMode::importance;
     wo.rr_depth = 1 << 20;
@@ -72,7 +75,8 @@ double direct_emission(float albedo, float g, Vec3<double> X, std::vector<Vec3<d
         (void)walk(scene, st, rng, t, wo);
     }
     const double vol = 4.0 / 3.0 * pi_v<double> * delta * delta * delta;
-    return t.sum / (double(photons) * vol);
+    for (double& v : t.sums) v /= double(photons) * vol;
+    return t.sums;
 }
 
 }  // namespace
@@ -102,19 +106,13 @@ TEST_CASE("ms_bias (a): the table equals a direct infinite-medium tally at the s
         const Vec3<double> w(s * std::cos(p.phi), s * std::sin(p.phi), p.cos_t);
         // The direct emission toward w, and averaged over w's table bin (8 x 8 directions equal
         // in cos theta and phi, both mirror images): a table of bins holds bin averages.
-        std::vector<Vec3<double>> ws{w};
-        const std::size_t j = t.direction_bin(p.cos_t, p.phi), it = j / std::size_t(o.n_phi), ip = j % std::size_t(o.n_phi);
+        const std::size_t j = t.direction_bin(p.cos_t, p.phi);
+        std::vector<Vec3<double>> ws;
         for (int a = 0; a < 8; ++a)
             for (int b = 0; b < 8; ++b)
-                for (int m = 0; m < 2; ++m) {
-                    const double c0 = std::cos(pi_v<double> * double(it) / o.n_theta), c1 = std::cos(pi_v<double> * double(it + 1) / o.n_theta);
-                    const double ct = c0 + (c1 - c0) * (a + 0.5) / 8, st = std::sqrt(1 - ct * ct);
-                    const double ph = pi_v<double> * (double(ip) + (b + 0.5) / 8) / o.n_phi * (m ? -1.0 : 1.0);
-                    ws.emplace_back(st * std::cos(ph), st * std::sin(ph), ct);
-                }
-        const double direct = direct_emission(alpha, g, X, {w}, 0.25, 300000);
-        ws.erase(ws.begin());
-        const double direct_bin = direct_emission(alpha, g, X, ws, 0.25, 300000);
+                for (int m = 0; m < 2; ++m) ws.push_back(ms_bin_point(t.grid(), j, (a + 0.5) / 8, (b + 0.5) / 8, m == 1));
+        const std::vector<double> d = direct_emission(alpha, g, X, {{w}, ws}, 0.25, 300000);  // one walk, both tallies
+        const double direct = d[0], direct_bin = d[1];
         const double nearest = t.eval(0, p.rho, p.z, p.cos_t, p.phi);
         const double interp = t.eval_interpolated(0, p.rho, p.z, p.cos_t, p.phi);
         std::printf("ms_bias (a) rho %.1f z %.1f: direct %.4g  table nearest %.4g (%+.1f%%)  interpolated %.4g (%+.1f%%)"

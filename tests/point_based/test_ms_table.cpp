@@ -96,13 +96,7 @@ TEST_CASE("ms_table: the phase matrix is the bin average of the phase function a
     const HenyeyGreenstein<float, Grey> ph(0.7f);
     const std::vector<double> pm = detail::ms_table_phase_matrix(ph, shape);
     const std::size_t nd = grid.directions();
-    auto dir = [&](std::size_t b, double fa, double fb, bool mirror) {
-        const std::size_t it = b / grid.n_phi, ip = b % grid.n_phi;
-        const double c0 = std::cos(pi_v<double> * double(it) / grid.n_theta), c1 = std::cos(pi_v<double> * double(it + 1) / grid.n_theta);
-        const double ct = c0 + (c1 - c0) * fa, st = std::sqrt(std::max(0.0, 1 - ct * ct));
-        const double phi = pi_v<double> * (double(ip) + fb) / grid.n_phi * (mirror ? -1.0 : 1.0);
-        return Vec3f(float(st * std::cos(phi)), float(st * std::sin(phi)), float(ct));
-    };
+    auto dir = [&](std::size_t b, double fa, double fb, bool mirror) { return Vec3f(ms_bin_point(grid, b, fa, fb, mirror)); };
     int compared = 0;
     for (const std::size_t i : {std::size_t(0), std::size_t(9), std::size_t(14), std::size_t(30)}) {
         for (std::size_t j = 0; j < nd; ++j) {

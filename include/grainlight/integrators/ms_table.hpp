@@ -126,6 +126,18 @@ struct MsCellCorners {
     const double th0 = pi_v<double> * double(it) / grid.n_theta, th1 = pi_v<double> * double(it + 1) / grid.n_theta;
     return 2.0 * pi_v<double> / grid.n_phi * (std::cos(th0) - std::cos(th1));
 }
+/// A direction inside direction bin j = it n_phi + ip on `grid`: the fraction fc of the bin's
+/// cos theta range (0 at its edge nearer theta = 0) and fp of its phi range, so that uniform
+/// (fc, fp) are uniform in solid angle; `mirror` gives the image at -phi.
+[[nodiscard]] inline Vec3<double> ms_bin_point(const MsTableGrid& grid, std::size_t j, double fc, double fp,
+                                               bool mirror) noexcept {
+    const std::size_t it = j / grid.n_phi, ip = j % grid.n_phi;
+    const double c0 = std::cos(pi_v<double> * double(it) / grid.n_theta);
+    const double c1 = std::cos(pi_v<double> * double(it + 1) / grid.n_theta);
+    const double ct = c0 + (c1 - c0) * fc, st = std::sqrt(std::max(0.0, 1.0 - ct * ct));
+    const double ph = pi_v<double> * (double(ip) + fp) / grid.n_phi * (mirror ? -1.0 : 1.0);
+    return {st * std::cos(ph), st * std::sin(ph), ct};
+}
 /// Volume of a cell of radial index ir on `grid` (a ring of height (z_max - z_min) / n_z) [l^3].
 [[nodiscard]] inline double ms_cell_volume(const MsTableGrid& grid, std::size_t ir) noexcept {
     const double dr = grid.rho_max / grid.n_rho, dz = (grid.z_max - grid.z_min) / grid.n_z;
