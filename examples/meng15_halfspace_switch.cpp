@@ -52,8 +52,8 @@ namespace m15 = gl_examples::meng15;
 namespace {
 
 constexpr int kOrders = 3;  // switch after k = 1..kOrders explicit interactions
-enum Variant : int { vpt_entry_lib = 0, vpt_entry, tt_entry, vpt_exit, tt_exit, variants_per_k };
-const char* const kVariantNames[variants_per_k] = {"vpt_entry_lib", "vpt_entry", "tt_entry", "vpt_exit", "tt_exit"};
+enum Variant : int { vpt_entry_lib = 0, vpt_entry_nomem, vpt_entry, vpt_mem_entry, tt_entry, vpt_exit, tt_exit, variants_per_k };
+const char* const kVariantNames[variants_per_k] = {"vpt_entry_lib", "vpt_entry_nomem", "vpt_entry", "vpt_mem_entry", "tt_entry", "vpt_exit", "tt_exit"};
 constexpr int kVariants = 1 + kOrders * variants_per_k;  // 0: EPT
 int variant_index(int k, int v) { return 1 + (k - 1) * variants_per_k + v; }
 
@@ -97,6 +97,75 @@ double vpt_walk(const m15::Grains& g, std::size_t c, gl::Vec3d p, gl::Vec3d w, d
         if (!enter_half_space(p, w)) return b;
         const double t = -std::log1p(-rng.uniform<double>()) / sig;
         if (w.y > 0.0 && p.y + t * w.y >= 0.0) return b;
+        p += t * w;
+        scatter();
+        if (!roulette(b, b, rng, depth)) return 0.0;
+    }
+    return 0.0;
+}
+
+/// A flight segment remembered by vpt_walk_memk.
+struct Seg {
+    gl::Vec3d a{0.0}, b{0.0};
+};
+struct SegHistory {
+    std::array<Seg, 8> s{};
+    int n = 0;  // segments stored (newest at (n - 1) % 8)
+    void push(const gl::Vec3d& a, const gl::Vec3d& b) { s[std::size_t(n++ % 8)] = Seg{a, b}; }
+};
+
+/// vpt_walk with K flights of memory: a candidate collision at distance t is real with the
+/// probability that a grain centre in the collision disc (radius R, perpendicular to the flight)
+/// is not in one of the remembered flights' empty tubes; 32 points of the disc (Vogel spiral).
+double vpt_walk_memk(const m15::Grains& g, int K, int E, std::size_t c, gl::Vec3d p, gl::Vec3d w, double b, SegHistory h,
+                     gl::Rng& rng) {
+    const double sig = g.rte.sigma_t[c], alb = g.rte.alpha_s[c];
+    const double R = 1.0;
+    const auto& phase = g.medium.phase();
+    auto scatter = [&]() {
+        b *= alb;
+        const auto ps = phase.sample(gl::Vec3f(w), rng.uniform2<float>());
+        b *= double(ps.weight[c]);
+        w = glm::normalize(gl::Vec3d(ps.w));
+    };
+    constexpr int N = 32;
+    std::array<gl::Vec2d, N> disc;
+    for (int i = 0; i < N; ++i) {
+        const double r = std::sqrt((i + 0.5) / N), ph = i * 2.399963229728653;
+        disc[std::size_t(i)] = gl::Vec2d(r * std::cos(ph), r * std::sin(ph));
+    }
+    auto in_tubes = [&](const gl::Vec3d& P) {
+        const int m = std::min(K, std::min(h.n, 8));
+        for (int j = 0; j < m; ++j) {
+            const Seg& sg = h.s[std::size_t((h.n - 1 - j) % 8)];
+            const gl::Vec3d ab = sg.b - sg.a;
+            const double L2 = glm::dot(ab, ab);
+            if (!(L2 > 0)) continue;
+            const gl::Vec3d ap = P - sg.a;
+            const double tau = glm::dot(ap, ab);
+            if (tau < 0 || tau > L2) continue;
+            if (glm::dot(ap, ap) - tau * tau / L2 < R * R) return true;
+        }
+        return false;
+    };
+    scatter();
+    for (int depth = 0; depth < 100000; ++depth) {
+        if (!enter_half_space(p, w)) return b;
+        const gl::Frame<double> fr(w);
+        double t = 0;
+        bool escaped = false;
+        for (;;) {
+            t += -std::log1p(-rng.uniform<double>()) / sig;
+            if (w.y > 0.0 && p.y + t * w.y >= 0.0) { escaped = true; break; }
+            if (depth >= E) break;
+            const gl::Vec3d q = p + t * w;
+            int in = 0;
+            for (int i = 0; i < N; ++i)
+                in += in_tubes(q + R * fr.to_world(gl::Vec3d(disc[std::size_t(i)].x, disc[std::size_t(i)].y, 0.0))) ? 1 : 0;
+            if (rng.uniform<double>() * N >= in) break;
+        }
+        if (escaped) return b;
+        h.push(p, p + t * w);
         p += t * w;
         scatter();
         if (!roulette(b, b, rng, depth)) return 0.0;
@@ -162,11 +231,19 @@ int main(int argc, char** argv) {
         const double H = ex.opt<double>("half-width", 300.0, 1000.0, "half-width of the half-space box, grain radii");
         const double D = ex.opt<double>("depth", 300.0, 1000.0, "depth of the half-space box, grain radii");
         const int level = ex.opt<int>("grain-level", 3, 4, "icosphere level of the grain mesh");
+        const int mem_k = ex.opt<int>("flight-memory", gl::HybridOptions{}.flight_memory, gl::HybridOptions{}.flight_memory,
+                                      "flights remembered by the continuations with flight memory (HybridOptions::flight_memory)");
+        const int mem_e = ex.opt<int>("flight-memory-flights", gl::HybridOptions{}.flight_memory_flights,
+                                      gl::HybridOptions{}.flight_memory_flights,
+                                      "flights of those continuations that use the memory (HybridOptions::flight_memory_flights)");
         ex.ready();
         if (paths < 100 || paths > 1000000000LL) throw cli_error("--paths = " + std::to_string(paths) + " must be in [100, 1e9]");
         if (!(H >= 20 && H <= 1e5)) throw cli_error("--half-width = " + ex.given_text("half-width") + " must be in [20, 1e5]");
         if (!(D >= 20 && D <= 1e5)) throw cli_error("--depth = " + ex.given_text("depth") + " must be in [20, 1e5]");
         if (level < 1 || level > 5) throw cli_error("--grain-level must be in [1, 5]");
+        if (mem_k < 0 || mem_k > gl::FlightMemory::capacity)
+            throw cli_error("--flight-memory = " + std::to_string(mem_k) + " must be in [0, " + std::to_string(gl::FlightMemory::capacity) + "]");
+        if (mem_e < 0) throw cli_error("--flight-memory-flights = " + std::to_string(mem_e) + " must be >= 0");
         std::vector<double> angles;
         {
             std::stringstream ss(angles_text);
@@ -194,6 +271,10 @@ int main(int argc, char** argv) {
         gl::HybridOptions hopt;
         hopt.mode = gl::HybridMode::ept_vpt;
         hopt.vpt.max_depth = 1 << 20;  // no truncation (the library's default of 256 events cuts high-albedo paths)
+        hopt.flight_memory = mem_k;
+        hopt.flight_memory_flights = mem_e;
+        gl::HybridOptions hopt_nomem = hopt;
+        hopt_nomem.flight_memory = 0;  // Meng15's memoryless VPT
         gl::EptOptions eopt;
         eopt.max_events = 1 << 20;
 
@@ -233,7 +314,14 @@ int main(int argc, char** argv) {
                             return std::min(kDirBins - 1, int(std::acos(c) / gl::pi_v<double> * kDirBins));
                         };
                         auto fork_rng = [&](int vi) { return gl::Rng::from_key(seed ^ 0x5eedf0cull, i, std::uint64_t(vi) * 64 + ai); };
+                        SegHistory hist;
+                        gl::FlightMemory lib_hist;
+                        lib_hist.radius = 1.0;
                         auto policy = [&](const gl::EptPathState<gl::RGB>& st, const gl::Vec3d& x, bool same) {
+                            if (!same) {
+                                hist.push(st.p, x);
+                                lib_hist.push(st.p, x);
+                            }
                             if (same || !shape.inside(x)) return gl::EptSwitch::stay;
                             for (int k = 1; k <= kOrders; ++k) {
                                 const int v0 = variant_index(k, vpt_entry_lib);
@@ -242,8 +330,14 @@ int main(int argc, char** argv) {
                                 const gl::RGBd beta = to_rgbd(st.beta);
                                 {
                                     gl::Rng r = fork_rng(v0);
-                                    est[std::size_t(v0)] =
-                                        base + to_rgbd(gl::hybrid_vpt_continuation(vpt, ctx, x, st.d, st.beta, r, hopt));
+                                    est[std::size_t(v0)] = base + to_rgbd(gl::hybrid_vpt_continuation(vpt, ctx, x, st.d, st.beta, r, hopt,
+                                                                                                       nullptr, nullptr, &lib_hist));
+                                }
+                                {
+                                    const int vi = variant_index(k, vpt_entry_nomem);
+                                    gl::Rng r = fork_rng(vi);
+                                    est[std::size_t(vi)] =
+                                        base + to_rgbd(gl::hybrid_vpt_continuation(vpt, ctx, x, st.d, st.beta, r, hopt_nomem));
                                 }
                                 {
                                     const int vi = variant_index(k, vpt_entry);
@@ -263,7 +357,15 @@ int main(int argc, char** argv) {
                                     gl::Vec3d we(0.0);
                                     est[std::size_t(vi)] = base + tt_walk(tt, x, st.d, beta, true, r, we);
                                 }
-                                for (int v = vpt_entry_lib; v <= tt_entry; ++v) forked[std::size_t(variant_index(k, v))] = true;
+                                {
+                                    const int vi = variant_index(k, vpt_mem_entry);
+                                    gl::Rng r = fork_rng(vi);
+                                    gl::RGBd e = base;
+                                    for (std::size_t c = 0; c < 3; ++c) e[c] += vpt_walk_memk(g, mem_k, mem_e, c, x, st.d, beta[c], hist, r);
+                                    est[std::size_t(vi)] = e;
+                                    forked[std::size_t(vi)] = true;
+                                }
+                                for (int v : {int(vpt_entry_lib), int(vpt_entry_nomem), int(vpt_entry), int(tt_entry)}) forked[std::size_t(variant_index(k, v))] = true;
                             }
                             return gl::EptSwitch::stay;
                         };
@@ -390,6 +492,10 @@ int main(int argc, char** argv) {
                     .num("rel_diff_vpt_k1", rel(1, vpt_entry_lib))
                     .num("rel_diff_vpt_k1_stderr", rel_se(1, vpt_entry_lib))
                     .num("rel_diff_vpt_plain_k1", rel(1, vpt_entry))
+                    .num("rel_diff_vpt_nomem_k1", rel(1, vpt_entry_nomem))
+                    .num("rel_diff_vpt_nomem_k1_stderr", rel_se(1, vpt_entry_nomem))
+                    .num("rel_diff_vpt_mem_plain_k1", rel(1, vpt_mem_entry))
+                    .num("rel_diff_vpt_nomem_k3", rel(3, vpt_entry_nomem))
                     .num("rel_diff_vpt_k2", rel(2, vpt_entry_lib))
                     .num("rel_diff_vpt_k3", rel(3, vpt_entry_lib))
                     .num("rel_diff_vpt_k3_stderr", rel_se(3, vpt_entry_lib))
@@ -401,7 +507,7 @@ int main(int argc, char** argv) {
             per_angle += std::string(ai ? "," : "") + "\"theta_" + std::to_string(int(angles[ai])) + "\":" + ak;
         }
         per_angle += "}";
-        std::printf("\nvariant codes in the CSV: 0 vpt_entry_lib, 1 vpt_entry, 2 tt_entry, 3 vpt_exit, 4 tt_exit\n");
+        std::printf("\nvariant codes in the CSV: 0 vpt_entry_lib, 1 vpt_entry_nomem, 2 vpt_entry, 3 vpt_mem_entry, 4 tt_entry, 5 vpt_exit, 6 tt_exit\n");
         const auto csv_path = ex.csv("meng15_halfspace_switch.csv", csv);
         const auto dir_path = ex.csv("meng15_halfspace_switch_directions.csv", dir_csv);
         std::printf("wrote %s and %s\n", csv_path.c_str(), dir_path.c_str());

@@ -8,6 +8,7 @@
 
 #include "grainlight/integrators/discrete_vpt.hpp"
 #include "grainlight/integrators/ept.hpp"
+#include "grainlight/integrators/flight_memory.hpp"
 #include "grainlight/integrators/hybrid.hpp"
 #include "grainlight/integrators/ms_table.hpp"
 #include "grainlight/integrators/ms_table_family.hpp"

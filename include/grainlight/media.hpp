@@ -8,6 +8,7 @@
 #include "grainlight/media/concepts.hpp"
 #include "grainlight/media/continuous.hpp"
 #include "grainlight/media/discrete_particles.hpp"
+#include "grainlight/media/flight_memory.hpp"
 #include "grainlight/media/grain_stats.hpp"
 #include "grainlight/media/medium_set.hpp"
 #include "grainlight/media/shell.hpp"

@@ -486,12 +486,15 @@ TEST_CASE("P_a that never loses: robust preview moments and the resolved-gain ru
     }
 }
 
-TEST_CASE("Switch calibration: a half-space of sand grains needs more explicit interactions than one",
+TEST_CASE("Switch calibration: a half-space of sand grains needs more explicit interactions than one without flight memory, "
+          "one with it",
           "[hybrid][calibration]") {
     // Meng15's sand grains (geometry/grains.hpp preset; Table 1 albedo 0.68) in an MD packing at
     // f = 0.6 (unit bounding radius), as the sandcastle. EPT of the half-space is the reference;
-    // switching after one interaction loses light (examples/meng15_halfspace_switch: -7.9 +- 0.3 %
-    // at normal incidence with 100 000 paths), switching after three loses much less.
+    // switching to memoryless VPT after one interaction loses light (examples/
+    // meng15_halfspace_switch: -7.9 +- 0.3 % at normal incidence with 100 000 paths), switching
+    // after three loses much less; with flight memory (media/flight_memory.hpp) one interaction
+    // is enough (-1.7 +- 0.3 % at 100 000 paths).
     const auto packed = md_pack(100, 0.6, 3);
     std::vector<Vec3d> centers = packed.tile.centers();
     const double s = 1.0 / packed.tile.radius();
@@ -515,6 +518,7 @@ TEST_CASE("Switch calibration: a half-space of sand grains needs more explicit i
     o.half_width = 100;
     o.depth = 100;
     o.threads = 2;
+    o.flight_memory = 0;  // Meng15's memoryless VPT
     const SwitchCalibration c = calibrate_min_ept_interactions(tile, ex, {1.0}, 7, medium, o);
     INFO(c.to_string());
     REQUIRE(c.by_k.size() == 3);
@@ -528,6 +532,19 @@ TEST_CASE("Switch calibration: a half-space of sand grains needs more explicit i
     CHECK(std::abs(c.by_k[2].rel_diff) < std::abs(c.by_k[0].rel_diff));
     CHECK(c.by_k[2].switched_fraction < c.by_k[0].switched_fraction);
     CHECK(c.min_ept_interactions >= 2);
+
+    // Flight memory (the default): the same paths switched after one interaction keep most of the
+    // light the memoryless continuation loses (same EPT paths, same continuation streams). These
+    // coarse level-2 grains (80 facets): -11.0 +- 1.1 % without, -4.4 +- 1.2 % with memory; the
+    // examples' level-3 / level-4 grains: -7.9 / -7.5 % without, -1.7 / -1.5 % with.
+    SwitchCalibrationOptions om = o;
+    om.flight_memory = HybridOptions{}.flight_memory;
+    REQUIRE(om.flight_memory > 0);
+    const SwitchCalibration cm = calibrate_min_ept_interactions(tile, ex, {1.0}, 7, medium, om);
+    INFO(cm.to_string());
+    CHECK(cm.by_k[0].rel_diff - c.by_k[0].rel_diff > 0.04);
+    CHECK(std::abs(cm.by_k[0].rel_diff) < 0.5 * std::abs(c.by_k[0].rel_diff));
+    CHECK(cm.min_ept_interactions <= c.min_ept_interactions);
 
     SECTION("same numbers on one thread") {
         SwitchCalibrationOptions o1 = o;
@@ -556,5 +573,8 @@ TEST_CASE("Switch calibration: a half-space of sand grains needs more explicit i
         bad = o;
         bad.max_paths = 10;
         CHECK_THROWS_WITH(calibrate_min_ept_interactions(tile, ex, {1.0}, 7, medium, bad), Catch::Contains("max_paths"));
+        bad = o;
+        bad.flight_memory = 99;
+        CHECK_THROWS_WITH(calibrate_min_ept_interactions(tile, ex, {1.0}, 7, medium, bad), Catch::Contains("flight_memory"));
     }
 }

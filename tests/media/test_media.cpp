@@ -170,3 +170,128 @@ TEST_CASE("Continuous medium rejects bad parameters", "[media][errors]") {
     CHECK_THROWS_AS(M(1.0, -0.1, {}), grainlight::invalid_argument);
     CHECK_THROWS_AS(M(std::numeric_limits<double>::infinity(), 0.5, {}), grainlight::invalid_argument);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Flight memory (media/flight_memory.hpp)
+// ---------------------------------------------------------------------------------------------
+
+TEST_CASE("Flight memory: shadowed fraction of the collision disc against closed forms", "[media][flight-memory]") {
+    FlightMemory mem;
+    mem.radius = 1.0;
+    mem.push(Vec3d(0, 0, -10), Vec3d(0, 0, 10));  // a remembered flight along the z axis
+    const double tol = 0.04;                      // 32 disc points
+    SECTION("flight across the tube: the disc meets the tube in a strip") {
+        // Flight along x; disc in the y-z plane at distance h from the axis (along x): the tube
+        // contains the disc points with h^2 + y^2 < R^2, a strip |y| < a = sqrt(1 - h^2).
+        const Frame<double> fr(Vec3d(1, 0, 0));
+        for (double h : {0.0, 0.5, 0.8, 0.95, 1.2}) {
+            const double a = h < 1 ? std::sqrt(1 - h * h) : 0.0;
+            const double exact = 2.0 / pi_v<double> * (std::asin(a) + a * std::sqrt(1 - a * a));
+            INFO("h = " << h);
+            CHECK(mem.shadowed_fraction(Vec3d(h, 0, 0), fr.s, fr.t) == Approx(exact).margin(tol));
+        }
+    }
+    SECTION("flight along the tube: two discs' overlap") {
+        const Frame<double> fr(Vec3d(0, 0, 1));
+        for (double d : {0.0, 0.5, 1.0, 1.5, 2.5}) {
+            const double area = d < 2 ? 2 * std::acos(d / 2) - 0.5 * d * std::sqrt(4 - d * d) : 0.0;  // R = 1
+            INFO("d = " << d);
+            CHECK(mem.shadowed_fraction(Vec3d(d, 0, 3), fr.s, fr.t) == Approx(area / pi_v<double>).margin(tol));
+        }
+        // Past the end of the remembered flight: nothing is known there.
+        CHECK(mem.shadowed_fraction(Vec3d(0, 0, 12), fr.s, fr.t) == 0.0);
+    }
+    SECTION("far away and empty memories") {
+        const Frame<double> fr(Vec3d(1, 0, 0));
+        CHECK_FALSE(mem.near(Vec3d(0, 2.5, 0)));
+        CHECK(mem.near(Vec3d(0, 1.5, 0)));
+        CHECK(mem.shadowed_fraction(Vec3d(0, 2.5, 0), fr.s, fr.t) == 0.0);
+        FlightMemory none;
+        CHECK_FALSE(none.active());
+        CHECK(none.shadowed_fraction(Vec3d(0.0), fr.s, fr.t) == 0.0);
+    }
+    SECTION("only the most recent flights count") {
+        FlightMemory m2;
+        m2.remembered = 1;
+        m2.push(Vec3d(0, 0, -10), Vec3d(0, 0, 10));
+        m2.push(Vec3d(5, 0, 0), Vec3d(9, 0, 0));
+        const Frame<double> fr(Vec3d(1, 0, 0));
+        CHECK(m2.shadowed_fraction(Vec3d(0, 0, 0), fr.s, fr.t) == 0.0);  // the z flight is forgotten
+        m2.remembered = 2;
+        CHECK(m2.shadowed_fraction(Vec3d(0, 0, 0), fr.s, fr.t) == 1.0);
+    }
+}
+
+TEST_CASE("Flight memory medium: free flights, shadow rays and the rate integral agree", "[media][flight-memory]") {
+    // The path came up the z axis to the origin; the next flight leaves the origin 25 degrees off
+    // the way back (-z), so it runs through the remembered tube for a few radii. Three estimates of
+    // the same medium must agree per channel: (1) exp(-sigma_t (s - integral of f)) by fine
+    // quadrature of the shadowed fraction f, (2) the shadow-ray estimator transmittance(), (3) the
+    // escape weights of sample_interaction (delta tracking with spectral weights); and the
+    // collisions before s must carry albedo * (1 - T(s)).
+    using M = ContinuousMedium<IsotropicPhase<float, RGB>, RGB>;
+    const M base(RGB{0.5f, 1.0f, 2.0f}, RGB{0.9f, 0.7f, 0.5f}, {});
+    FlightMemory mem0;
+    mem0.radius = 1.0;
+    mem0.push(Vec3d(0, 0, -6), Vec3d(0, 0, 0));
+    const double th = 25.0 * pi_v<double> / 180.0;
+    const Vec3d w(std::sin(th), 0.0, -std::cos(th));
+    const Ray<float> ray(Vec3f(0.f), Vec3f(w));
+    const double s = 3.0;
+    // (1) quadrature
+    const Frame<double> fr(w);
+    double integral_f = 0;
+    const int nq = 4000;
+    for (int i = 0; i < nq; ++i) {
+        const double t = (i + 0.5) * s / nq;
+        integral_f += mem0.shadowed_fraction(t * w, fr.s, fr.t) * s / nq;
+    }
+    REQUIRE(integral_f > 0.5);  // the memory matters on this flight
+    RGBd exact{};
+    for (std::size_t c = 0; c < 3; ++c) exact[c] = std::exp(-double(base.sigma_t()[c]) * (s - integral_f));
+
+    const int n = 200000;
+    std::array<Welford, 3> tr, esc, col;
+    int bookkeeping_errors = 0;
+    auto rng = Pcg32::from_key(11);
+    for (int i = 0; i < n; ++i) {
+        FlightMemory mem = mem0;
+        const FlightMemoryMedium<M> m(base, &mem);
+        const RGB t = m.transmittance(ray, float(s), rng);
+        const auto it = m.sample_interaction(ray, float(s), rng);
+        for (std::size_t c = 0; c < 3; ++c) {
+            tr[c].add(double(t[c]));
+            esc[c].add(it.is_escape() ? double(it.weight[c]) : 0.0);
+            col[c].add(it.kind == EventKind::scatter ? double(it.weight[c]) : 0.0);
+        }
+        // A collision remembers the flight and uses up one of the memory's flights.
+        if (it.kind != EventKind::escape && (mem.count != 2 || mem.flights_left != mem0.flights_left - 1)) ++bookkeeping_errors;
+    }
+    CHECK(bookkeeping_errors == 0);
+    for (std::size_t c = 0; c < 3; ++c) {
+        INFO("channel " << c << ": exact " << exact[c] << ", transmittance " << tr[c].mean() << " +- " << tr[c].standard_error()
+                        << ", escapes " << esc[c].mean() << " +- " << esc[c].standard_error());
+        CHECK(std::abs(tr[c].mean() - exact[c]) < 4 * tr[c].standard_error() + 1e-3);
+        CHECK(std::abs(esc[c].mean() - exact[c]) < 4 * esc[c].standard_error() + 1e-3);
+        const double alb = double(base.albedo()[c]);
+        CHECK(std::abs(col[c].mean() - alb * (1 - exact[c])) < 4 * col[c].standard_error() + 1e-3);
+        // Memoryless would be exp(-sigma_t s): clearly darker on this flight.
+        CHECK(exact[c] > 1.3 * std::exp(-double(base.sigma_t()[c]) * s));
+    }
+
+    SECTION("without memory it is the base medium, bit for bit") {
+        auto r1 = Pcg32::from_key(3), r2 = Pcg32::from_key(3);
+        FlightMemory spent = mem0;
+        spent.flights_left = 0;
+        for (FlightMemory* mp : {static_cast<FlightMemory*>(nullptr), &spent}) {
+            const FlightMemoryMedium<M> m(base, mp);
+            for (int i = 0; i < 200; ++i) {
+                const auto a = m.sample_interaction(ray, float(s), r1);
+                const auto b = base.sample_interaction(ray, float(s), r2);
+                REQUIRE(a.kind == b.kind);
+                REQUIRE(a.t == b.t);
+                REQUIRE(a.weight == b.weight);
+            }
+        }
+    }
+}

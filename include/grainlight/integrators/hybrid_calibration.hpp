@@ -58,6 +58,10 @@ struct SwitchCalibrationOptions {
     double depth = 300.0;                  ///< half-space box depth, grain radii
     std::uint64_t seed = 1;                ///< path seed
     int threads = 0;                       ///< OpenMP threads (<= 0: default)
+    /// The continuation's flight memory (HybridOptions::flight_memory; 0: memoryless VPT). Must
+    /// match the render's, whose bias is being calibrated.
+    int flight_memory = HybridOptions{}.flight_memory;
+    int flight_memory_flights = HybridOptions{}.flight_memory_flights;  ///< HybridOptions::flight_memory_flights
 };
 
 /// Bias of switching after k explicit interactions (the mean over the incidence angles).
@@ -142,6 +146,10 @@ template <class Medium>
     HybridOptions hopt;
     hopt.mode = HybridMode::ept_vpt;
     hopt.vpt.max_depth = 1 << 20;  // no truncation: the reference is not truncated either
+    hopt.flight_memory = o.flight_memory;
+    hopt.flight_memory_flights = o.flight_memory_flights;
+    hopt.validate(where);
+    const bool memory = hopt.uses_flight_memory();
     EptOptions eopt;
     eopt.max_events = 1 << 20;
     const int K = o.max_k;
@@ -162,12 +170,16 @@ template <class Medium>
             S low(F(0)), high(F(0));
             std::uint64_t grain_rays = 0;
             std::fill(forked.begin(), forked.end(), char(0));
+            FlightMemory history;
+            history.radius = R;
             auto policy = [&](const EptPathState<S>& st, const Vec3d& x, bool same) {
+                if (memory && !same) history.push(st.p, x);
                 if (same || !shape.inside(x)) return EptSwitch::stay;
                 for (int k = 1; k <= K && k <= st.order; ++k) {
                     if (forked[std::size_t(k - 1)]) continue;
                     Rng r = Rng::from_key(o.seed ^ 0x6b666f726bull, i, std::uint64_t(k) * 64 + ai);
-                    est[std::size_t(k - 1)] = low + high + hybrid_vpt_continuation(vpt, ctx, x, st.d, st.beta, r, hopt);
+                    est[std::size_t(k - 1)] = low + high + hybrid_vpt_continuation(vpt, ctx, x, st.d, st.beta, r, hopt, nullptr, nullptr,
+                                                                                   memory ? &history : nullptr);
                     forked[std::size_t(k - 1)] = 1;
                 }
                 return EptSwitch::stay;

@@ -1,0 +1,59 @@
+/// @file grainlight/integrators/flight_memory.hpp
+/// A scene view whose one medium remembers the path's flights (media/flight_memory.hpp), so the
+/// walk kernel, the VPT callbacks and shadow rays (integrators/walk.hpp, vpt.hpp) run unchanged
+/// on a medium with flight memory: `FlightMemoryScene(scene, medium, &memory)` forwards every
+/// call to `scene` and returns, for medium index `medium`, a FlightMemoryMedium over the
+/// scene's medium and the caller's memory (the other media unchanged, without memory).
+///
+/// One view per path: the memory is the path's state (no global state). `medium(i)` returns the
+/// wrapper by value (it is two pointers), which the kernel binds to a const reference.
+#pragma once
+
+#include "grainlight/media/flight_memory.hpp"
+#include "grainlight/scene/concepts.hpp"
+
+namespace grainlight {
+
+/// See the file comment. `Scene` must be a LitScene whose Medium has sigma_t(), albedo() and
+/// phase() (a homogeneous medium such as ContinuousMedium).
+template <LitScene Scene>
+class FlightMemoryScene {
+   public:
+    using Float = typename Scene::Float;                        ///< floating-point type
+    using Spectrum = typename Scene::Spectrum;                  ///< spectrum type
+    using Medium = FlightMemoryMedium<typename Scene::Medium>;  ///< media seen through the view
+
+    /// View of `scene` in which medium index `medium` remembers flights in `*memory`.
+    FlightMemoryScene(const Scene& scene, int medium, FlightMemory* memory) noexcept
+        : scene_(&scene), medium_(medium), mem_(memory) {}
+
+    /// The viewed scene.
+    [[nodiscard]] const Scene& base() const noexcept { return *scene_; }
+    /// Medium i (with the memory if i is the remembering medium).
+    [[nodiscard]] Medium medium(int i) const noexcept { return Medium(scene_->medium(i), i == medium_ ? mem_ : nullptr); }
+    /// Forwarded to the scene.
+    [[nodiscard]] SurfaceHit<Float, Spectrum> intersect(const Ray<Float>& r) const noexcept { return scene_->intersect(r); }
+    /// Forwarded to the scene.
+    [[nodiscard]] bool occluded(const Vec3<Float>& p, const Vec3<Float>& q) const noexcept { return scene_->occluded(p, q); }
+    /// Forwarded to the scene.
+    [[nodiscard]] LightSample<Float, Spectrum> sample_light(const Vec3<Float>& ref, const Vec3<Float>& u) const noexcept {
+        return scene_->sample_light(ref, u);
+    }
+    /// Forwarded to the scene.
+    [[nodiscard]] Float light_pdf(const Vec3<Float>& ref, const Vec3<Float>& w, const SurfaceHit<Float, Spectrum>& hit) const noexcept {
+        return scene_->light_pdf(ref, w, hit);
+    }
+    /// Forwarded to the scene.
+    [[nodiscard]] Spectrum emitted(const SurfaceHit<Float, Spectrum>& hit, const Vec3<Float>& w) const noexcept {
+        return scene_->emitted(hit, w);
+    }
+    /// Forwarded to the scene.
+    [[nodiscard]] Spectrum environment(const Vec3<Float>& w) const noexcept { return scene_->environment(w); }
+
+   private:
+    const Scene* scene_;
+    int medium_;
+    FlightMemory* mem_;
+};
+
+}  // namespace grainlight

@@ -1,0 +1,283 @@
+/// @file grainlight/media/flight_memory.hpp
+/// Flight memory: the shadowing correlation of a packed granular medium, for effective-medium
+/// walks that continue a path traced through explicit grains (Meng15's VPT after EPT).
+///
+/// An effective medium (Meng15 Eq. 4) draws every free flight afresh from an exponential. In a
+/// packing, a flight that turns back near the way it came finds that channel free of grains: the
+/// path has already crossed it. A memoryless medium puts grains there again, so near a boundary,
+/// where much of the reflected light turns back through the channel it entered by, it returns
+/// too little light (the shadow-hiding correlation of particulate media: Irvine 1966, "The
+/// shadowing effect in diffuse reflection", JGR 71; Hapke 1986, Icarus 67). Measured in a
+/// half-space of sand grains (docs/meng15_hybrid.md): switching to VPT after one explicit grain
+/// interaction returns 7.8 % / 5.8 % too little light at 0 / 60 degrees incidence.
+///
+/// The model. Grain centres are treated as a Poisson process, so a flight of a path from a to b
+/// is known to have no centre within the grain radius R of the segment: its tube. A later flight
+/// from p along w collides at distance t with a grain whose centre lies in the disc of radius R
+/// around p + t w perpendicular to w; the part of that disc inside a remembered tube holds no
+/// centre. The collision rate is therefore sigma_t (1 - f(t)), with f the shadowed fraction of
+/// the disc (the union over the K most recent flights, evaluated on 32 points of a Vogel spiral),
+/// and the albedo and phase function are unchanged. Sampling is delta tracking against sigma_t
+/// with f as the null fraction (spectral weights when the channels' sigma_t differ; Kutz et al.
+/// 2017, "Spectral and decomposition tracking"); shadow rays use the same rate (the exponential
+/// transmittance times an unbiased estimate of exp(sigma_t * integral of f), candidate points only
+/// near remembered flights). Both see the same medium, so NEE and phase sampling stay consistent.
+///
+/// Where it applies: `FlightMemory::flights_left` limits the memory to the first flights after
+/// the switch (a remembered tube only matters near where it was made; in the half-space, 8 flights
+/// give the same reflectance as unlimited memory within 0.1 %, and deep high-albedo walks keep
+/// their cost).
+///
+/// `FlightMemoryMedium<M>` wraps a homogeneous medium `M` (sigma_t(), albedo(), phase(): e.g.
+/// ContinuousMedium) and a caller-owned FlightMemory; with no memory (null, empty or spent) it is
+/// `M` itself, bit for bit. Kernel rules: no allocation, no exceptions, no virtual calls.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include "grainlight/core/frame.hpp"
+#include "grainlight/core/math.hpp"
+#include "grainlight/core/ray.hpp"
+#include "grainlight/core/rng.hpp"
+#include "grainlight/core/vector.hpp"
+#include "grainlight/core/warp.hpp"
+#include "grainlight/media/concepts.hpp"
+
+namespace grainlight {
+
+/// The most recent flights of a path through a packing of grains of radius `radius`, as
+/// segments whose tubes of that radius are known to hold no grain centre (see the file comment).
+struct FlightMemory {
+    /// Flights stored at most.
+    static constexpr int capacity = 8;
+    double radius = 1.0;   ///< grain (bounding-sphere) radius R, world units
+    int remembered = 4;    ///< K: flights whose tubes count (1..capacity; 0: no memory)
+    int flights_left = 8;  ///< flights of the walk that still use the memory (each scattering flight uses one)
+    std::array<Vec3d, capacity> from{};  ///< segment starts (ring buffer)
+    std::array<Vec3d, capacity> to{};    ///< segment ends
+    int count = 0;                       ///< flights pushed so far (the newest at (count - 1) % capacity)
+
+    /// Remember the flight from a to b.
+    void push(const Vec3d& a, const Vec3d& b) noexcept {
+        const auto i = std::size_t(count % capacity);
+        from[i] = a;
+        to[i] = b;
+        ++count;
+    }
+    /// Forget every flight.
+    void clear() noexcept { count = 0; }
+    /// Whether the memory changes the medium now.
+    [[nodiscard]] bool active() const noexcept { return count > 0 && remembered > 0 && flights_left > 0; }
+    /// Number of flights whose tubes count.
+    [[nodiscard]] int size() const noexcept { return std::min({count, remembered, capacity}); }
+
+    /// Whether point q is within 2R of a remembered flight (else the shadowed fraction there is 0).
+    [[nodiscard]] bool near(const Vec3d& q) const noexcept {
+        const double r2 = 4.0 * radius * radius;
+        for (int j = 0; j < size(); ++j)
+            if (distance2_to_segment(q, j) < r2) return true;
+        return false;
+    }
+
+    /// Shadowed fraction f of the collision disc of radius R centred at q, perpendicular to the
+    /// flight direction whose frame tangents are s and t: the share of its area within R of a
+    /// remembered flight (axially within the flight), on 32 points of a Vogel spiral.
+    [[nodiscard]] double shadowed_fraction(const Vec3d& q, const Vec3d& s, const Vec3d& t) const noexcept {
+        const int m = size();
+        if (m == 0) return 0.0;
+        // Skip flights farther than 2R from q (no disc point can be within R of them).
+        std::array<int, capacity> idx{};
+        int k = 0;
+        const double r2 = radius * radius;
+        for (int j = 0; j < m; ++j)
+            if (distance2_to_segment(q, j) < 4.0 * r2) idx[std::size_t(k++)] = j;
+        if (k == 0) return 0.0;
+        int in = 0;
+        for (const auto& d : kDisc) {
+            const Vec3d x = q + radius * (d[0] * s + d[1] * t);
+            for (int a = 0; a < k; ++a) {
+                if (in_tube(x, idx[std::size_t(a)], r2)) {
+                    ++in;
+                    break;
+                }
+            }
+        }
+        return double(in) / double(kDisc.size());
+    }
+
+   private:
+    // Segment j counted back from the newest.
+    [[nodiscard]] std::size_t slot(int j) const noexcept { return std::size_t((count - 1 - j) % capacity); }
+    [[nodiscard]] double distance2_to_segment(const Vec3d& x, int j) const noexcept {
+        const Vec3d a = from[slot(j)], ab = to[slot(j)] - a, ax = x - a;
+        const double L2 = glm::dot(ab, ab);
+        const double u = L2 > 0 ? std::clamp(glm::dot(ax, ab) / L2, 0.0, 1.0) : 0.0;
+        const Vec3d d = ax - u * ab;
+        return glm::dot(d, d);
+    }
+    // x within R of the segment's axis and axially within the segment.
+    [[nodiscard]] bool in_tube(const Vec3d& x, int j, double r2) const noexcept {
+        const Vec3d a = from[slot(j)], ab = to[slot(j)] - a, ax = x - a;
+        const double L2 = glm::dot(ab, ab);
+        if (!(L2 > 0)) return false;
+        const double u = glm::dot(ax, ab);
+        if (u < 0 || u > L2) return false;
+        return glm::dot(ax, ax) - u * u / L2 < r2;
+    }
+    // Unit disc: 32 points of a Vogel (golden-angle) spiral, r = sqrt((i + 1/2) / 32).
+    static constexpr std::array<std::array<double, 2>, 32> kDisc{{
+        {0.125000000, 0.000000000},   {-0.159645045, 0.146247939},  {0.024436233, -0.278438271}, {0.201222239, 0.262458779},
+        {-0.369267557, -0.065318231}, {0.349802466, -0.222515696},  {-0.117002079, 0.435241902}, {-0.223135654, -0.429634123},
+        {0.484115115, 0.176798064},   {-0.503641109, 0.207895728},  {0.242788294, -0.518824483}, {0.179414374, 0.572001296},
+        {-0.540757006, -0.313379738}, {0.634369523, -0.139464360},  {-0.387145845, 0.550675126}, {-0.089439655, -0.690199644},
+        {0.549071757, 0.462758258},   {-0.738878471, 0.030554945},  {0.538955125, -0.536332334}, {-0.036058186, 0.779791515},
+        {-0.512817532, -0.614526793}, {0.812359593, 0.109301834},   {-0.688310641, 0.478908616}, {0.188086057, -0.836061382},
+        {0.435033266, 0.759191055},   {-0.850448410, -0.271316239}, {0.826102401, -0.381680263}, {-0.357888202, 0.855155562},
+        {-0.319407334, -0.888033758}, {0.849908635, 0.446688159},   {-0.944034646, 0.248844503}, {0.536595808, -0.834529771},
+    }};
+};
+
+/// A homogeneous medium M whose flights remember the path's recent flights (see the file
+/// comment). Holds pointers: the medium and the memory must outlive it. With a null, empty or
+/// spent memory every call is M's own.
+template <class M>
+    requires requires(const M& m) {
+        m.sigma_t();
+        m.albedo();
+        m.phase();
+    }
+class FlightMemoryMedium {
+   public:
+    using Float = typename M::Float;        ///< floating-point type of the medium
+    using Spectrum = typename M::Spectrum;  ///< spectrum type of the medium
+
+    /// `base`: the effective medium; `memory`: the path's memory (null: none).
+    FlightMemoryMedium(const M& base, FlightMemory* memory) noexcept : base_(&base), mem_(memory) {}
+
+    /// The base medium's phase function.
+    [[nodiscard]] decltype(auto) phase() const noexcept { return base_->phase(); }
+    /// The base medium's albedo per channel.
+    [[nodiscard]] decltype(auto) albedo() const noexcept { return base_->albedo(); }
+    /// The base medium's extinction per channel (the rate away from remembered flights).
+    [[nodiscard]] decltype(auto) sigma_t() const noexcept { return base_->sigma_t(); }
+    /// The base medium.
+    [[nodiscard]] const M& base() const noexcept { return *base_; }
+
+    /// Free flight along `ray` (unit direction) up to t_max; a scattering flight is remembered and
+    /// uses up one of the memory's flights.
+    [[nodiscard]] Interaction<Float, Spectrum> sample_interaction(const Ray<Float>& ray, Float t_max, Rng& rng) const noexcept {
+        using F = Float;
+        using S = Spectrum;
+        if (!mem_ || !mem_->active()) return base_->sample_interaction(ray, t_max, rng);
+        const S& sig = base_->sigma_t();
+        const S& alb = base_->albedo();
+        const double s_max = double(sig.max_value()), s_avg = double(sig.average());
+        Interaction<F, S> it;
+        if (!(s_max > 0)) {
+            it.kind = EventKind::escape;
+            it.t = t_max;
+            it.p = ray(t_max);
+            return it;
+        }
+        const Vec3d o(ray.o), w(ray.d);
+        const Frame<double> fr(w);
+        S weight(F(1));
+        double t = 0;
+        for (;;) {
+            t += sample_exponential(rng.uniform<double>(), s_max);
+            if (!(t < double(t_max))) {
+                it.kind = EventKind::escape;
+                it.t = t_max;
+                it.p = ray(t_max);
+                it.weight = weight;
+                return it;
+            }
+            const Vec3d q = o + t * w;
+            const double rho = 1.0 - (mem_->near(q) ? mem_->shadowed_fraction(q, fr.s, fr.t) : 0.0);
+            const double p_collide = rho * s_avg / s_max;
+            if (rng.uniform<double>() < p_collide) {
+                // Collision: weight sigma_s^k / (rho sigma_avg) * rho = albedo^k sigma_t^k / sigma_avg.
+                S ws = weight;
+                for (std::size_t c = 0; c < S::size; ++c) ws[c] *= F(double(alb[c]) * double(sig[c]) / s_avg);
+                it.t = F(t);
+                it.p = Vec3<F>(q);
+                mem_->push(o, q);
+                --mem_->flights_left;
+                const F pq = std::min(F(1), ws.max_value());
+                if (pq > F(0) && rng.uniform<F>() < pq) {
+                    it.kind = EventKind::scatter;
+                    it.weight = ws / pq;
+                    it.nee = NeeKind::phase;
+                } else {
+                    it.kind = EventKind::absorb;
+                    it.weight = S(F(0));
+                }
+                return it;
+            }
+            // Null collision: weight (s_max - rho sigma^k) / (s_max - rho sigma_avg) per channel.
+            const double den = s_max - rho * s_avg;
+            for (std::size_t c = 0; c < S::size; ++c) weight[c] *= F((s_max - rho * double(sig[c])) / den);
+        }
+    }
+
+    /// Transmittance along `ray` over distance t: exp(-sigma_t (t - integral of f)), with the
+    /// factor exp(sigma_t * integral of f) estimated without bias from candidate points at rate
+    /// max sigma_t on the stretches that pass within 2R of a remembered flight.
+    [[nodiscard]] Spectrum transmittance(const Ray<Float>& ray, Float t, Rng& rng) const noexcept {
+        using F = Float;
+        using S = Spectrum;
+        S tr = base_->transmittance(ray, t, rng);
+        if (!mem_ || !mem_->active() || tr.is_black()) return tr;
+        const S& sig = base_->sigma_t();
+        const double lambda = double(sig.max_value());
+        if (!(lambda > 0)) return tr;
+        const Vec3d o(ray.o), w(ray.d);
+        const double tmax = std::isfinite(double(t)) ? double(t) : 1e30;
+        // Stretches of the ray near remembered flights: each flight's bounding sphere grown by 2R.
+        std::array<std::array<double, 2>, FlightMemory::capacity> iv{};
+        int n = 0;
+        for (int j = 0; j < mem_->size(); ++j) {
+            const std::size_t sl = std::size_t((mem_->count - 1 - j) % FlightMemory::capacity);
+            const Vec3d c = 0.5 * (mem_->from[sl] + mem_->to[sl]);
+            const double r = 0.5 * glm::length(mem_->to[sl] - mem_->from[sl]) + 2.0 * mem_->radius;
+            const Vec3d oc = o - c;
+            const double b = glm::dot(oc, w), cc = glm::dot(oc, oc) - r * r;
+            const double disc = b * b - cc;
+            if (disc <= 0) continue;
+            const double sq = std::sqrt(disc);
+            const double t0 = std::max(0.0, -b - sq), t1 = std::min(tmax, -b + sq);
+            if (t1 > t0) iv[std::size_t(n++)] = {t0, t1};
+        }
+        if (n == 0) return tr;
+        for (int i = 1; i < n; ++i)  // insertion sort by start (n <= capacity)
+            for (int j = i; j > 0 && iv[std::size_t(j)][0] < iv[std::size_t(j - 1)][0]; --j) std::swap(iv[std::size_t(j)], iv[std::size_t(j - 1)]);
+        const Frame<double> fr(w);
+        S factor(F(1));
+        double covered = 0;  // end of the stretch already sampled (merging overlaps)
+        for (int i = 0; i < n; ++i) {
+            double a = std::max(iv[std::size_t(i)][0], covered);
+            const double b = iv[std::size_t(i)][1];
+            if (b <= a) continue;
+            covered = b;
+            for (;;) {
+                a += sample_exponential(rng.uniform<double>(), lambda);
+                if (!(a < b)) break;
+                const Vec3d q = o + a * w;
+                const double f = mem_->shadowed_fraction(q, fr.s, fr.t);
+                if (f <= 0) continue;
+                for (std::size_t c = 0; c < S::size; ++c) factor[c] *= F(1.0 + double(sig[c]) * f / lambda);
+            }
+        }
+        return tr * factor;
+    }
+
+   private:
+    const M* base_;
+    FlightMemory* mem_;
+};
+
+}  // namespace grainlight
