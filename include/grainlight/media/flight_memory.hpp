@@ -83,30 +83,72 @@ struct FlightMemory {
         return false;
     }
 
+    /// Clips [t0, t1] to the stretch of the ray o + tau w (unit w) that lies within 2R of
+    /// remembered flight j (0: the newest): inside the cylinder of radius 2R about its axis and
+    /// the slab 2R beyond its ends (a superset of the capsule). False if that is empty.
+    [[nodiscard]] bool near_interval(const Vec3d& o, const Vec3d& w, int j, double& t0, double& t1) const noexcept {
+        const Vec3d a = from[slot(j)], ab = to[slot(j)] - a;
+        const double L = glm::length(ab);
+        if (!(L > 0)) return false;
+        const Vec3d e = ab / L, oa = o - a;
+        const double r = 2.0 * radius;
+        // Slab: -r < (oa + tau w).e < L + r.
+        const double h = glm::dot(oa, e), we = glm::dot(w, e);
+        if (std::abs(we) > 1e-12) {
+            double s0 = (-r - h) / we, s1 = (L + r - h) / we;
+            if (s0 > s1) std::swap(s0, s1);
+            t0 = std::max(t0, s0);
+            t1 = std::min(t1, s1);
+        } else if (h <= -r || h >= L + r) {
+            return false;
+        }
+        // Cylinder: |oa_perp + tau w_perp|^2 < r^2.
+        const Vec3d wp = w - we * e, op = oa - h * e;
+        const double A = glm::dot(wp, wp), B = glm::dot(op, wp), C = glm::dot(op, op) - r * r;
+        if (A > 1e-12) {
+            const double disc = B * B - A * C;
+            if (disc <= 0) return false;
+            const double sq = std::sqrt(disc);
+            t0 = std::max(t0, (-B - sq) / A);
+            t1 = std::min(t1, (-B + sq) / A);
+        } else if (C >= 0) {
+            return false;
+        }
+        return t1 > t0;
+    }
+
     /// Shadowed fraction f of the collision disc of radius R centred at q, perpendicular to the
     /// flight direction whose frame tangents are s and t: the share of its area within R of a
     /// remembered flight (axially within the flight), on 32 points of a Vogel spiral.
     [[nodiscard]] double shadowed_fraction(const Vec3d& q, const Vec3d& s, const Vec3d& t) const noexcept {
         const int m = size();
         if (m == 0) return 0.0;
-        // Skip flights farther than 2R from q (no disc point can be within R of them).
-        std::array<int, capacity> idx{};
-        int k = 0;
+        // Per flight a -> b (ab = b - a, L2 = |ab|^2), a disc point x = q + R (u s + v t) has
+        //   (x - a).ab = c0 + u c1 + v c2   and   |x - a|^2 = e0 + u e1 + v e2 + R^2 (u^2 + v^2),
+        // so the test "within R of the axis, axially inside" is a few multiply-adds per point.
         const double r2 = radius * radius;
-        for (int j = 0; j < m; ++j)
-            if (distance2_to_segment(q, j) < 4.0 * r2) idx[std::size_t(k++)] = j;
-        if (k == 0) return 0.0;
-        int in = 0;
-        for (const auto& d : kDisc) {
-            const Vec3d x = q + radius * (d[0] * s + d[1] * t);
-            for (int a = 0; a < k; ++a) {
-                if (in_tube(x, idx[std::size_t(a)], r2)) {
-                    ++in;
-                    break;
-                }
+        std::array<bool, kPoints> in{};
+        bool any = false;
+        for (int j = 0; j < m; ++j) {
+            if (distance2_to_segment(q, j) >= 4.0 * r2) continue;  // no disc point within R of it
+            const Vec3d a = from[slot(j)], ab = to[slot(j)] - a, qa = q - a;
+            const double L2 = glm::dot(ab, ab);
+            if (!(L2 > 0)) continue;
+            const double inv_L2 = 1.0 / L2;
+            const double c0 = glm::dot(qa, ab), c1 = radius * glm::dot(s, ab), c2 = radius * glm::dot(t, ab);
+            const double e0 = glm::dot(qa, qa), e1 = 2.0 * radius * glm::dot(qa, s), e2 = 2.0 * radius * glm::dot(qa, t);
+            for (std::size_t i = 0; i < kPoints; ++i) {
+                const double u = kDiscU[i], v = kDiscV[i];
+                const double ax = c0 + u * c1 + v * c2;
+                const double d2 = e0 + u * e1 + v * e2 + r2 * kDiscR2[i] - ax * ax * inv_L2;
+                in[i] = in[i] || (ax >= 0.0 && ax <= L2 && d2 < r2);
             }
+            any = true;
         }
-        return double(in) / double(kDisc.size());
+        if (!any) return 0.0;
+        int n = 0;
+        for (bool b : in) n += b ? 1 : 0;
+        return double(n) / double(kPoints);
     }
 
    private:
@@ -119,26 +161,26 @@ struct FlightMemory {
         const Vec3d d = ax - u * ab;
         return glm::dot(d, d);
     }
-    // x within R of the segment's axis and axially within the segment.
-    [[nodiscard]] bool in_tube(const Vec3d& x, int j, double r2) const noexcept {
-        const Vec3d a = from[slot(j)], ab = to[slot(j)] - a, ax = x - a;
-        const double L2 = glm::dot(ab, ab);
-        if (!(L2 > 0)) return false;
-        const double u = glm::dot(ax, ab);
-        if (u < 0 || u > L2) return false;
-        return glm::dot(ax, ax) - u * u / L2 < r2;
-    }
-    // Unit disc: 32 points of a Vogel (golden-angle) spiral, r = sqrt((i + 1/2) / 32).
-    static constexpr std::array<std::array<double, 2>, 32> kDisc{{
-        {0.125000000, 0.000000000},   {-0.159645045, 0.146247939},  {0.024436233, -0.278438271}, {0.201222239, 0.262458779},
-        {-0.369267557, -0.065318231}, {0.349802466, -0.222515696},  {-0.117002079, 0.435241902}, {-0.223135654, -0.429634123},
-        {0.484115115, 0.176798064},   {-0.503641109, 0.207895728},  {0.242788294, -0.518824483}, {0.179414374, 0.572001296},
-        {-0.540757006, -0.313379738}, {0.634369523, -0.139464360},  {-0.387145845, 0.550675126}, {-0.089439655, -0.690199644},
-        {0.549071757, 0.462758258},   {-0.738878471, 0.030554945},  {0.538955125, -0.536332334}, {-0.036058186, 0.779791515},
-        {-0.512817532, -0.614526793}, {0.812359593, 0.109301834},   {-0.688310641, 0.478908616}, {0.188086057, -0.836061382},
-        {0.435033266, 0.759191055},   {-0.850448410, -0.271316239}, {0.826102401, -0.381680263}, {-0.357888202, 0.855155562},
-        {-0.319407334, -0.888033758}, {0.849908635, 0.446688159},   {-0.944034646, 0.248844503}, {0.536595808, -0.834529771},
-    }};
+    // Unit disc: 32 points of a Vogel (golden-angle) spiral, r = sqrt((i + 1/2) / 32), and r^2.
+    static constexpr std::size_t kPoints = 32;
+    static constexpr std::array<double, kPoints> kDiscU{
+        0.125000000, -0.159645045, 0.024436233, 0.201222239, -0.369267557, 0.349802466, -0.117002079, -0.223135654,
+        0.484115115, -0.503641109, 0.242788294, 0.179414374, -0.540757006, 0.634369523, -0.387145845, -0.089439655,
+        0.549071757, -0.738878471, 0.538955125, -0.036058186, -0.512817532, 0.812359593, -0.688310641, 0.188086057,
+        0.435033266, -0.850448410, 0.826102401, -0.357888202, -0.319407334, 0.849908635, -0.944034646, 0.536595808,
+    };
+    static constexpr std::array<double, kPoints> kDiscV{
+        0.000000000, 0.146247939, -0.278438271, 0.262458779, -0.065318231, -0.222515696, 0.435241902, -0.429634123,
+        0.176798064, 0.207895728, -0.518824483, 0.572001296, -0.313379738, -0.139464360, 0.550675126, -0.690199644,
+        0.462758258, 0.030554945, -0.536332334, 0.779791515, -0.614526793, 0.109301834, 0.478908616, -0.836061382,
+        0.759191055, -0.271316239, -0.381680263, 0.855155562, -0.888033758, 0.446688159, 0.248844503, -0.834529771,
+    };
+    static constexpr std::array<double, kPoints> kDiscR2{
+        0.015625000, 0.046875000, 0.078125000, 0.109375000, 0.140625000, 0.171875000, 0.203125000, 0.234375000,
+        0.265625000, 0.296875000, 0.328125000, 0.359375000, 0.390625000, 0.421875000, 0.453125000, 0.484375000,
+        0.515625000, 0.546875000, 0.578125000, 0.609375000, 0.640625000, 0.671875000, 0.703125000, 0.734375000,
+        0.765625000, 0.796875000, 0.828125000, 0.859375000, 0.890625000, 0.921875000, 0.953125000, 0.984375000,
+    };
 };
 
 /// A homogeneous medium M whose flights remember the path's recent flights (see the file
@@ -237,20 +279,12 @@ class FlightMemoryMedium {
         if (!(lambda > 0)) return tr;
         const Vec3d o(ray.o), w(ray.d);
         const double tmax = std::isfinite(double(t)) ? double(t) : 1e30;
-        // Stretches of the ray near remembered flights: each flight's bounding sphere grown by 2R.
+        // Stretches of the ray within 2R of a remembered flight (elsewhere f = 0).
         std::array<std::array<double, 2>, FlightMemory::capacity> iv{};
         int n = 0;
         for (int j = 0; j < mem_->size(); ++j) {
-            const std::size_t sl = std::size_t((mem_->count - 1 - j) % FlightMemory::capacity);
-            const Vec3d c = 0.5 * (mem_->from[sl] + mem_->to[sl]);
-            const double r = 0.5 * glm::length(mem_->to[sl] - mem_->from[sl]) + 2.0 * mem_->radius;
-            const Vec3d oc = o - c;
-            const double b = glm::dot(oc, w), cc = glm::dot(oc, oc) - r * r;
-            const double disc = b * b - cc;
-            if (disc <= 0) continue;
-            const double sq = std::sqrt(disc);
-            const double t0 = std::max(0.0, -b - sq), t1 = std::min(tmax, -b + sq);
-            if (t1 > t0) iv[std::size_t(n++)] = {t0, t1};
+            double t0 = 0, t1 = tmax;
+            if (mem_->near_interval(o, w, j, t0, t1)) iv[std::size_t(n++)] = {t0, t1};
         }
         if (n == 0) return tr;
         for (int i = 1; i < n; ++i)  // insertion sort by start (n <= capacity)
