@@ -1,7 +1,9 @@
 // Benchmarks of the Meng15 Sec. 5 hybrid integrator (integrators/hybrid.hpp): camera paths/s of
 // lock-step bundles (N = 16) into a sphere of 20 grain radii of slightly absorbing ice-like
 // grains (MD packing, f = 0.6) under a quad light and a sky, for EPT only, EPT -> VPT and
-// EPT -> VPT -> DA; DA connections/s (semi-infinite dipole vs App. A multipole); Eq. 5's spread.
+// EPT -> VPT -> DA (EPT -> VPT with and without flight memory); DA connections/s (semi-infinite
+// dipole vs App. A multipole); Eq. 5's spread; one free flight / shadow segment with and without
+// flight memory.
 //
 //   bench_hybrid                            (items/s = camera paths/s, connections/s, points/s)
 //   bench_hybrid --benchmark_filter=Bundle
@@ -16,6 +18,7 @@
 #include "grainlight/core/warp.hpp"
 #include "grainlight/integrators/hybrid.hpp"
 #include "grainlight/media/continuous.hpp"
+#include "grainlight/media/flight_memory.hpp"
 #include "grainlight/media/teleportation.hpp"
 #include "grainlight/packing/md_packer.hpp"
 #include "grainlight/phase/tabulated.hpp"
@@ -69,11 +72,12 @@ const Fixture& fixture() {
     return *f;
 }
 
-void BM_Bundle(benchmark::State& state, HybridMode mode) {
+void BM_Bundle(benchmark::State& state, HybridMode mode, int flight_memory) {
     const Fixture& f = fixture();
     const HybridContext<BoundaryDistance<SphereBoundary>> ctx{f.medium, f.boundary, {f.shape}, &*f.diffusion};
     HybridOptions opt;
     opt.mode = mode;
+    opt.flight_memory = flight_memory;
     std::array<Ray<float>, 16> rays;
     std::array<Rng, 16> rngs;
     std::uint64_t k = 0, switched = 0, da = 0, paths = 0;
@@ -97,9 +101,40 @@ void BM_Bundle(benchmark::State& state, HybridMode mode) {
     state.counters["switched_fraction"] = double(switched) / double(paths);
     state.counters["da_per_path"] = double(da) / double(paths);
 }
-BENCHMARK_CAPTURE(BM_Bundle, EPT, HybridMode::ept)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_Bundle, EPT_VPT, HybridMode::ept_vpt)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_Bundle, EPT_VPT_DA, HybridMode::ept_vpt_da)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Bundle, EPT, HybridMode::ept, 0)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Bundle, EPT_VPT, HybridMode::ept_vpt, HybridOptions{}.flight_memory)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Bundle, EPT_VPT_memoryless, HybridMode::ept_vpt, 0)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Bundle, EPT_VPT_DA, HybridMode::ept_vpt_da, HybridOptions{}.flight_memory)->Unit(benchmark::kMicrosecond);
+
+// One free flight / one shadow segment of the effective medium with and without flight memory
+// (media/flight_memory.hpp): the path came 3 grain radii up the z axis and leaves at a random
+// direction, i.e. the first flight after a switch; `memory` 0 is the base medium.
+void BM_FlightMemoryFlight(benchmark::State& state, int memory, bool shadow) {
+    const Fixture& f = fixture();
+    const Medium& base = f.vpt.medium(f.medium);
+    FlightMemory mem0;
+    mem0.radius = 1.0;
+    mem0.push(Vec3d(0, 0, -6), Vec3d(0, 0, -3));
+    mem0.push(Vec3d(0, 0, -3), Vec3d(0, 0, 0));
+    mem0.remembered = memory;
+    Rng rng = Rng::from_key(5, 0, 0);
+    std::int64_t n = 0;
+    for (auto _ : state) {
+        FlightMemory mem = mem0;
+        const FlightMemoryMedium<Medium> m(base, memory > 0 ? &mem : nullptr);
+        const Ray<float> ray(Vec3f(0.0f), Vec3f(sample_uniform_sphere(rng.uniform2<double>())));
+        if (shadow)
+            benchmark::DoNotOptimize(m.transmittance(ray, 8.0f, rng));
+        else
+            benchmark::DoNotOptimize(m.sample_interaction(ray, 8.0f, rng));
+        ++n;
+    }
+    state.SetItemsProcessed(n);
+}
+BENCHMARK_CAPTURE(BM_FlightMemoryFlight, flight_base, 0, false);
+BENCHMARK_CAPTURE(BM_FlightMemoryFlight, flight_memory4, 4, false);
+BENCHMARK_CAPTURE(BM_FlightMemoryFlight, shadow_base, 0, true);
+BENCHMARK_CAPTURE(BM_FlightMemoryFlight, shadow_memory4, 4, true);
 
 void BM_DiffusionConnection(benchmark::State& state, bool multipole) {
     const Fixture& f = fixture();
