@@ -259,7 +259,7 @@ int main(int argc, char** argv) {
         "Wang18 point-based single + double + multiple + bounced scattering vs the VPT reference",
         "out/wang18_point_based", [&](gl_examples::Example& ex) -> int {
             Params prm;
-            prm.vpt_spp = ex.opt<int>("vpt-spp", 512, 4096, "VPT samples per pixel and channel, multiple of 8");
+            prm.vpt_spp = ex.opt<int>("vpt-spp", 2048, 4096, "VPT samples per pixel and channel, multiple of 8");
             prm.n_surface = ex.opt<int>("surface-samples", 12000, 20000,
                                         "light surface samples on the sphere (the thick case uses twice as many at quick)");
             prm.eps1 = ex.opt<double>("eps1", 0.2, 0.2,
@@ -274,6 +274,8 @@ int main(int argc, char** argv) {
             const std::string table_quality = ex.opt<std::string>(
                 "table", "quick", "full",
                 "the MS table's resolution and particle count: quick (48 x 96 x 12 x 6, 2e5) or full (96 x 192 x 18 x 9, 2e6)");
+            const double table_range = ex.opt<double>("table-range", 10.0, 10.0,
+                                                      "the MS table's extent, +- this many mean free paths (cells of the same size)");
             const long long table_photons_opt = ex.opt<long long>(
                 "table-photons", 0, 0, "the MS table's particle count; 0 = the --table value's (2e5 or 2e6), else in [1000, 1e9]");
             prm.bounce_generations =
@@ -315,6 +317,8 @@ int main(int argc, char** argv) {
                 reflection == "diffuse" ? gl::BounceReflection::diffuse : gl::BounceReflection::specular;
             if (table_quality != "quick" && table_quality != "full")
                 throw gl_examples::cli_error("--table = " + table_quality + " must be quick or full");
+            if (!(table_range >= 2.0 && table_range <= 40.0))
+                throw gl_examples::cli_error("--table-range = " + std::to_string(table_range) + " must be in [2, 40] mean free paths");
             if (table_photons_opt != 0 && (table_photons_opt < 1000 || table_photons_opt > 1000000000))
                 throw gl_examples::cli_error("--table-photons = " + std::to_string(table_photons_opt) +
                                              " must be 0 or in [1000, 1e9]");
@@ -332,12 +336,16 @@ int main(int argc, char** argv) {
             to.n_z = full_table ? 192 : 96;
             to.n_theta = full_table ? 18 : 12;
             to.n_phi = full_table ? 9 : 6;
-            to.rho_max = 10;
-            to.z_min = -10;
-            to.z_max = 10;
+            to.rho_max = table_range;
+            to.z_min = -table_range;
+            to.z_max = table_range;
+            if (table_range != 10.0) {  // same cell size as the +-10 mfp grid
+                to.n_rho = int(std::lround(to.n_rho * table_range / 10.0));
+                to.n_z = int(std::lround(to.n_z * table_range / 10.0));
+            }
             to.photons = table_photons_opt != 0 ? std::uint64_t(table_photons_opt) : (full_table ? 2000000u : 200000u);
             to.seed = prm.seed;
-            const auto table_path = out / ("wang18_ms_table_g0.7_bmps_" + std::to_string(to.n_rho) + "x" +
+            const auto table_path = out / ("wang18_ms_table_g0.7_bmps_" + (table_range != 10.0 ? "r" + std::to_string(int(std::lround(table_range * 10))) + "_" : std::string()) + std::to_string(to.n_rho) + "x" +
                                            std::to_string(to.n_z) + "x" + std::to_string(to.n_theta) + "x" +
                                            std::to_string(to.n_phi) + "_" + std::to_string(to.photons) + "_s" +
                                            std::to_string(prm.seed) + "_v" +

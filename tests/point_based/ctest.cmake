@@ -22,8 +22,9 @@ if(TARGET wang18_point_based OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_
   add_test(NAME wang18_point_based_bad_k_max COMMAND $<TARGET_FILE:wang18_point_based> --k-max 0)
   add_test(NAME wang18_point_based_bad_table_photons COMMAND $<TARGET_FILE:wang18_point_based> --table-photons 5)
   add_test(NAME wang18_point_based_bad_reflection COMMAND $<TARGET_FILE:wang18_point_based> --bounce-reflection glossy)
+  add_test(NAME wang18_point_based_bad_table_range COMMAND $<TARGET_FILE:wang18_point_based> --table-range 1)
   set_tests_properties(wang18_point_based_bad_table wang18_point_based_bad_k_max wang18_point_based_bad_table_photons
-                       wang18_point_based_bad_reflection
+                       wang18_point_based_bad_reflection wang18_point_based_bad_table_range
                        PROPERTIES WILL_FAIL TRUE LABELS "example;point_based")
 endif()
 
