@@ -116,9 +116,10 @@ struct SegHistory {
 
 /// vpt_walk with K flights of memory: a candidate collision at distance t is real with the
 /// probability that a grain centre in the collision disc (radius R, perpendicular to the flight)
-/// is not in one of the remembered flights' empty tubes; 32 points of the disc (Vogel spiral).
-double vpt_walk_memk(const m15::Grains& g, int K, int E, std::size_t c, gl::Vec3d p, gl::Vec3d w, double b, SegHistory h,
-                     gl::Rng& rng) {
+/// is not in one of the remembered flights' empty tubes (nor, with `boundary`, above the surface,
+/// where no grain has its centre); 32 points of the disc (Vogel spiral).
+double vpt_walk_memk(const m15::Grains& g, int K, int E, bool boundary, std::size_t c, gl::Vec3d p, gl::Vec3d w, double b,
+                     SegHistory h, gl::Rng& rng) {
     const double sig = g.rte.sigma_t[c], alb = g.rte.alpha_s[c];
     const double R = 1.0;
     const auto& phase = g.medium.phase();
@@ -160,8 +161,10 @@ double vpt_walk_memk(const m15::Grains& g, int K, int E, std::size_t c, gl::Vec3
             if (depth >= E) break;
             const gl::Vec3d q = p + t * w;
             int in = 0;
-            for (int i = 0; i < N; ++i)
-                in += in_tubes(q + R * fr.to_world(gl::Vec3d(disc[std::size_t(i)].x, disc[std::size_t(i)].y, 0.0))) ? 1 : 0;
+            for (int i = 0; i < N; ++i) {
+                const gl::Vec3d x = q + R * fr.to_world(gl::Vec3d(disc[std::size_t(i)].x, disc[std::size_t(i)].y, 0.0));
+                in += (in_tubes(x) || (boundary && x.y > 0.0)) ? 1 : 0;  // no grain centre above the surface
+            }
             if (rng.uniform<double>() * N >= in) break;
         }
         if (escaped) return b;
@@ -236,6 +239,9 @@ int main(int argc, char** argv) {
         const int mem_e = ex.opt<int>("flight-memory-flights", gl::HybridOptions{}.flight_memory_flights,
                                       gl::HybridOptions{}.flight_memory_flights,
                                       "flights of those continuations that use the memory (HybridOptions::flight_memory_flights)");
+        const bool mem_boundary = ex.opt<bool>(
+            "flight-memory-boundary", gl::HybridOptions{}.flight_memory_boundary,
+            "while the memory is active, no grain centre above the surface (HybridOptions::flight_memory_boundary)");
         ex.ready();
         if (paths < 100 || paths > 1000000000LL) throw cli_error("--paths = " + std::to_string(paths) + " must be in [100, 1e9]");
         if (!(H >= 20 && H <= 1e5)) throw cli_error("--half-width = " + ex.given_text("half-width") + " must be in [20, 1e5]");
@@ -273,6 +279,8 @@ int main(int argc, char** argv) {
         hopt.vpt.max_depth = 1 << 20;  // no truncation (the library's default of 256 events cuts high-albedo paths)
         hopt.flight_memory = mem_k;
         hopt.flight_memory_flights = mem_e;
+        hopt.flight_memory_boundary = mem_boundary;
+        const gl::CentresInside<gl::BoxBoundary, gl::BoundaryDistance<gl::BoxBoundary>> centres{&shape, &ctx.distance};
         gl::HybridOptions hopt_nomem = hopt;
         hopt_nomem.flight_memory = 0;  // Meng15's memoryless VPT
         gl::EptOptions eopt;
@@ -330,8 +338,9 @@ int main(int argc, char** argv) {
                                 const gl::RGBd beta = to_rgbd(st.beta);
                                 {
                                     gl::Rng r = fork_rng(v0);
-                                    est[std::size_t(v0)] = base + to_rgbd(gl::hybrid_vpt_continuation(vpt, ctx, x, st.d, st.beta, r, hopt,
-                                                                                                       nullptr, nullptr, &lib_hist));
+                                    est[std::size_t(v0)] =
+                                        base + to_rgbd(gl::hybrid_vpt_continuation(vpt, ctx, x, st.d, st.beta, r, hopt, nullptr, nullptr,
+                                                                                   &lib_hist, centres));
                                 }
                                 {
                                     const int vi = variant_index(k, vpt_entry_nomem);
@@ -361,7 +370,7 @@ int main(int argc, char** argv) {
                                     const int vi = variant_index(k, vpt_mem_entry);
                                     gl::Rng r = fork_rng(vi);
                                     gl::RGBd e = base;
-                                    for (std::size_t c = 0; c < 3; ++c) e[c] += vpt_walk_memk(g, mem_k, mem_e, c, x, st.d, beta[c], hist, r);
+                                    for (std::size_t c = 0; c < 3; ++c) e[c] += vpt_walk_memk(g, mem_k, mem_e, hopt.flight_memory_boundary, c, x, st.d, beta[c], hist, r);
                                     est[std::size_t(vi)] = e;
                                     forked[std::size_t(vi)] = true;
                                 }

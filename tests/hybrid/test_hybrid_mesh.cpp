@@ -86,14 +86,17 @@ TriangleMesh<double> blob_obj(double radius, const std::string& name) {
 }
 
 // Records the points where the DA switch fired (the hybrid asks ball_inside(x, d_DA)).
+// Records the DA criterion's queries (radius d_DA; the flight memory also asks, at the grain radius).
 struct RecordingDistance {
     const MeshDistance* mesh = nullptr;
     std::vector<Vec3d>* fired = nullptr;
     std::uint64_t* asked = nullptr;
+    double r_da = 0;  ///< the DA switch's radius: only its queries are recorded
     [[nodiscard]] double operator()(const Vec3d& p) const noexcept { return (*mesh)(p); }
     [[nodiscard]] bool ball_inside(const Vec3d& p, double r) const noexcept {
-        ++*asked;
         const bool b = mesh->ball_inside(p, r);
+        if (r != r_da) return b;
+        ++*asked;
         if (b && fired->size() < fired->capacity()) fired->push_back(p);
         return b;
     }
@@ -170,7 +173,7 @@ TEST_CASE("Mesh-boundary hybrid: the DA switch fires only >= d_DA from the mesh;
     fired.reserve(100000);
     std::uint64_t asked = 0;
     const HybridContext<RecordingDistance> ctx{mctx.medium, mctx.boundary_shape,
-                                               RecordingDistance{&mctx.distance, &fired, &asked}, &diff};
+                                               RecordingDistance{&mctx.distance, &fired, &asked, diff.d_DA}, &diff};
     HybridOptions da;
     da.mode = HybridMode::ept_vpt_da;
     HybridOptions eo = da, vo = da;

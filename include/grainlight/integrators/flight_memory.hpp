@@ -9,28 +9,49 @@
 /// wrapper by value (it is two pointers), which the kernel binds to a const reference.
 #pragma once
 
+#include "grainlight/geometry/distance.hpp"
 #include "grainlight/media/flight_memory.hpp"
 #include "grainlight/scene/concepts.hpp"
 
 namespace grainlight {
 
+/// Where an aggregate's grain centres lie, for FlightMemoryMedium: inside its boundary shape
+/// (GranularAggregate keeps the grains whose bounding-sphere centre is inside). `distance` is a
+/// distance-to-boundary query for the same shape (BoundaryDistance, MeshDistance: anything
+/// `ball_inside` takes), used to skip the per-point tests away from the boundary. Holds
+/// pointers: both must outlive it.
+template <class Shape, class Distance>
+struct CentresInside {
+    const Shape* shape = nullptr;        ///< the boundary (`inside(x)`)
+    const Distance* distance = nullptr;  ///< distance to the boundary
+    /// Whether a grain centre may lie at x.
+    [[nodiscard]] bool inside(const Vec3d& x) const noexcept { return shape->inside(x); }
+    /// Whether the ball of radius r about x is inside the boundary.
+    [[nodiscard]] bool deep(const Vec3d& x, double r) const noexcept { return ball_inside(*distance, x, r); }
+    /// It constrains (see AnyCentre).
+    static constexpr bool constrains = true;
+};
+
 /// See the file comment. `Scene` must be a LitScene whose Medium has sigma_t(), albedo() and
 /// phase() (a homogeneous medium such as ContinuousMedium).
-template <LitScene Scene>
+template <LitScene Scene, class Region = AnyCentre>
 class FlightMemoryScene {
    public:
-    using Float = typename Scene::Float;                        ///< floating-point type
-    using Spectrum = typename Scene::Spectrum;                  ///< spectrum type
-    using Medium = FlightMemoryMedium<typename Scene::Medium>;  ///< media seen through the view
+    using Float = typename Scene::Float;                                ///< floating-point type
+    using Spectrum = typename Scene::Spectrum;                          ///< spectrum type
+    using Medium = FlightMemoryMedium<typename Scene::Medium, Region>;  ///< media seen through the view
 
-    /// View of `scene` in which medium index `medium` remembers flights in `*memory`.
-    FlightMemoryScene(const Scene& scene, int medium, FlightMemory* memory) noexcept
-        : scene_(&scene), medium_(medium), mem_(memory) {}
+    /// View of `scene` in which medium index `medium` remembers flights in `*memory` (and, with
+    /// a constraining `region`, knows that no grain centre lies outside it).
+    FlightMemoryScene(const Scene& scene, int medium, FlightMemory* memory, Region region = {}) noexcept
+        : scene_(&scene), medium_(medium), mem_(memory), region_(region) {}
 
     /// The viewed scene.
     [[nodiscard]] const Scene& base() const noexcept { return *scene_; }
     /// Medium i (with the memory if i is the remembering medium).
-    [[nodiscard]] Medium medium(int i) const noexcept { return Medium(scene_->medium(i), i == medium_ ? mem_ : nullptr); }
+    [[nodiscard]] Medium medium(int i) const noexcept {
+        return Medium(scene_->medium(i), i == medium_ ? mem_ : nullptr, region_);
+    }
     /// Forwarded to the scene.
     [[nodiscard]] SurfaceHit<Float, Spectrum> intersect(const Ray<Float>& r) const noexcept { return scene_->intersect(r); }
     /// Forwarded to the scene.
@@ -54,6 +75,7 @@ class FlightMemoryScene {
     const Scene* scene_;
     int medium_;
     FlightMemory* mem_;
+    Region region_;
 };
 
 }  // namespace grainlight

@@ -216,6 +216,10 @@ struct HybridOptions {
     /// Flights of the VPT part that use the memory (the first ones after the switch; see
     /// FlightMemory::flights_left).
     int flight_memory_flights = 8;
+    /// While the memory is active, no grain centre lies outside the aggregate's boundary: a flight
+    /// near the boundary collides less (the part of its collision disc outside holds no centre).
+    /// Needs the boundary: hybrid_bundle and the switch calibration pass it (CentresInside).
+    bool flight_memory_boundary = true;
     double acceptance = 1.0;        ///< P_a in (0, 1]
     EptOptions ept{};               ///< EPT part (events budget, roulette, NEE)
     VptOptions vpt{};               ///< VPT part (depth, roulette, NEE)
@@ -558,7 +562,7 @@ template <LitScene Scene, class Distance>
 /// the switch and the grain radius (FlightMemory; the last flight ends at x); with it and
 /// `opt.uses_flight_memory()`, the VPT's first `opt.flight_memory_flights` flights remember the
 /// `opt.flight_memory` most recent flights (FlightMemoryScene); without it, memoryless VPT.
-template <LitScene Scene, class Distance>
+template <LitScene Scene, class Distance, class Region = AnyCentre>
     requires PhaseMedium<typename Scene::Medium>
 [[nodiscard]] typename Scene::Spectrum hybrid_vpt_continuation(const Scene& scene_vpt, const HybridContext<Distance>& ctx,
                                                                const Vec3d& x, const Vec3d& d,
@@ -566,7 +570,8 @@ template <LitScene Scene, class Distance>
                                                                const HybridOptions& opt,
                                                                HybridCounters* counters = nullptr,
                                                                typename Scene::Spectrum* da_part = nullptr,
-                                                               const FlightMemory* history = nullptr) noexcept {
+                                                               const FlightMemory* history = nullptr,
+                                                               const Region& region = {}) noexcept {
     if constexpr (requires(const typename Scene::Medium& m) {
                       m.sigma_t();
                       m.albedo();
@@ -575,6 +580,12 @@ template <LitScene Scene, class Distance>
             FlightMemory mem = *history;
             mem.remembered = opt.flight_memory;
             mem.flights_left = opt.flight_memory_flights;
+            if constexpr (Region::constrains) {
+                if (opt.flight_memory_boundary) {
+                    const FlightMemoryScene<Scene, Region> view(scene_vpt, ctx.medium, &mem, region);
+                    return detail::hybrid_vpt_continuation_impl(view, ctx, x, d, beta, rng, opt, counters, da_part);
+                }
+            }
             const FlightMemoryScene<Scene> view(scene_vpt, ctx.medium, &mem);
             return detail::hybrid_vpt_continuation_impl(view, ctx, x, d, beta, rng, opt, counters, da_part);
         }
@@ -766,7 +777,8 @@ template <LitScene Scene, BoundaryShape Shape, class Distance>
                 S da_part(0.0f);
                 res.path[std::size_t(i)].high +=
                     hybrid_vpt_continuation(scene_vpt, ctx, x_switch, q.d, beta, rng, opt, &res.counters, &da_part,
-                                            memory ? &history[std::size_t(i)] : nullptr);
+                                            memory ? &history[std::size_t(i)] : nullptr,
+                                            CentresInside<Shape, Distance>{&agg.boundary().shape(), &ctx.distance});
                 res.path[std::size_t(i)].da += da_part;
                 if (opt.measure_time) t_high += std::chrono::duration<double>(Clock::now() - th0).count();
             }

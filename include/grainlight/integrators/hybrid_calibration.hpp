@@ -62,6 +62,7 @@ struct SwitchCalibrationOptions {
     /// match the render's, whose bias is being calibrated.
     int flight_memory = HybridOptions{}.flight_memory;
     int flight_memory_flights = HybridOptions{}.flight_memory_flights;  ///< HybridOptions::flight_memory_flights
+    bool flight_memory_boundary = HybridOptions{}.flight_memory_boundary;  ///< HybridOptions::flight_memory_boundary
 };
 
 /// Bias of switching after k explicit interactions (the mean over the incidence angles).
@@ -148,8 +149,10 @@ template <class Medium>
     hopt.vpt.max_depth = 1 << 20;  // no truncation: the reference is not truncated either
     hopt.flight_memory = o.flight_memory;
     hopt.flight_memory_flights = o.flight_memory_flights;
+    hopt.flight_memory_boundary = o.flight_memory_boundary;
     hopt.validate(where);
     const bool memory = hopt.uses_flight_memory();
+    const CentresInside<BoxBoundary, BoundaryDistance<BoxBoundary>> region{&shape, &ctx.distance};
     EptOptions eopt;
     eopt.max_events = 1 << 20;
     const int K = o.max_k;
@@ -179,7 +182,7 @@ template <class Medium>
                     if (forked[std::size_t(k - 1)]) continue;
                     Rng r = Rng::from_key(o.seed ^ 0x6b666f726bull, i, std::uint64_t(k) * 64 + ai);
                     est[std::size_t(k - 1)] = low + high + hybrid_vpt_continuation(vpt, ctx, x, st.d, st.beta, r, hopt, nullptr, nullptr,
-                                                                                   memory ? &history : nullptr);
+                                                                                   memory ? &history : nullptr, region);
                     forked[std::size_t(k - 1)] = 1;
                 }
                 return EptSwitch::stay;

@@ -49,6 +49,18 @@
 
 namespace grainlight {
 
+/// Where grain centres may lie, for FlightMemoryMedium: everywhere (no boundary constraint).
+/// A region type has `inside(x)` (a grain centre may lie at x) and `deep(x, r)` (every point
+/// within r of x is inside; then `inside` need not be asked there).
+struct AnyCentre {
+    /// Always true.
+    [[nodiscard]] constexpr bool inside(const Vec3d&) const noexcept { return true; }
+    /// Always true.
+    [[nodiscard]] constexpr bool deep(const Vec3d&, double) const noexcept { return true; }
+    /// Whether the region constrains anything (false: the medium skips the tests).
+    static constexpr bool constrains = false;
+};
+
 /// The most recent flights of a path through a packing of grains of radius `radius`, as
 /// segments whose tubes of that radius are known to hold no grain centre (see the file comment).
 struct FlightMemory {
@@ -119,10 +131,14 @@ struct FlightMemory {
 
     /// Shadowed fraction f of the collision disc of radius R centred at q, perpendicular to the
     /// flight direction whose frame tangents are s and t: the share of its area within R of a
-    /// remembered flight (axially within the flight), on 32 points of a Vogel spiral.
-    [[nodiscard]] double shadowed_fraction(const Vec3d& q, const Vec3d& s, const Vec3d& t) const noexcept {
+    /// remembered flight (axially within the flight) or, with a constraining `region`, outside the
+    /// region where grain centres lie; on 32 points of a Vogel spiral.
+    template <class Region = AnyCentre>
+    [[nodiscard]] double shadowed_fraction(const Vec3d& q, const Vec3d& s, const Vec3d& t, const Region& region = {}) const noexcept {
         const int m = size();
-        if (m == 0) return 0.0;
+        bool edge = false;  // the disc may reach where no centre lies (outside the region)
+        if constexpr (Region::constrains) edge = !region.deep(q, radius);
+        if (m == 0 && !edge) return 0.0;
         // Per flight a -> b (ab = b - a, L2 = |ab|^2), a disc point x = q + R (u s + v t) has
         //   (x - a).ab = c0 + u c1 + v c2   and   |x - a|^2 = e0 + u e1 + v e2 + R^2 (u^2 + v^2),
         // so the test "within R of the axis, axially inside" is a few multiply-adds per point.
@@ -144,6 +160,13 @@ struct FlightMemory {
                 in[i] = in[i] || (ax >= 0.0 && ax <= L2 && d2 < r2);
             }
             any = true;
+        }
+        if constexpr (Region::constrains) {
+            if (edge) {
+                for (std::size_t i = 0; i < kPoints; ++i)
+                    if (!in[i]) in[i] = !region.inside(q + radius * (kDiscU[i] * s + kDiscV[i] * t));
+                any = true;
+            }
         }
         if (!any) return 0.0;
         int n = 0;
@@ -186,7 +209,7 @@ struct FlightMemory {
 /// A homogeneous medium M whose flights remember the path's recent flights (see the file
 /// comment). Holds pointers: the medium and the memory must outlive it. With a null, empty or
 /// spent memory every call is M's own.
-template <class M>
+template <class M, class Region = AnyCentre>
     requires requires(const M& m) {
         m.sigma_t();
         m.albedo();
@@ -197,8 +220,11 @@ class FlightMemoryMedium {
     using Float = typename M::Float;        ///< floating-point type of the medium
     using Spectrum = typename M::Spectrum;  ///< spectrum type of the medium
 
-    /// `base`: the effective medium; `memory`: the path's memory (null: none).
-    FlightMemoryMedium(const M& base, FlightMemory* memory) noexcept : base_(&base), mem_(memory) {}
+    /// `base`: the effective medium; `memory`: the path's memory (null: none); `region`: where
+    /// grain centres lie (the aggregate's boundary: no centre outside it, so a flight near the
+    /// boundary collides less; only while the memory is active).
+    FlightMemoryMedium(const M& base, FlightMemory* memory, Region region = {}) noexcept
+        : base_(&base), mem_(memory), region_(region) {}
 
     /// The base medium's phase function.
     [[nodiscard]] decltype(auto) phase() const noexcept { return base_->phase(); }
@@ -239,7 +265,9 @@ class FlightMemoryMedium {
                 return it;
             }
             const Vec3d q = o + t * w;
-            const double rho = 1.0 - (mem_->near(q) ? mem_->shadowed_fraction(q, fr.s, fr.t) : 0.0);
+            bool look = mem_->near(q);
+            if constexpr (Region::constrains) look = look || !region_.deep(q, mem_->radius);
+            const double rho = 1.0 - (look ? mem_->shadowed_fraction(q, fr.s, fr.t, region_) : 0.0);
             const double p_collide = rho * s_avg / s_max;
             if (rng.uniform<double>() < p_collide) {
                 // Collision: weight sigma_s^k / (rho sigma_avg) * rho = albedo^k sigma_t^k / sigma_avg.
@@ -282,9 +310,15 @@ class FlightMemoryMedium {
         // Stretches of the ray within 2R of a remembered flight (elsewhere f = 0).
         std::array<std::array<double, 2>, FlightMemory::capacity> iv{};
         int n = 0;
-        for (int j = 0; j < mem_->size(); ++j) {
-            double t0 = 0, t1 = tmax;
-            if (mem_->near_interval(o, w, j, t0, t1)) iv[std::size_t(n++)] = {t0, t1};
+        if constexpr (Region::constrains) {
+            // Near the boundary anywhere along the segment: one stretch, the whole segment
+            // (shadowed_fraction asks region.deep first).
+            iv[std::size_t(n++)] = {0.0, std::min(tmax, 1e6 * mem_->radius)};
+        } else {
+            for (int j = 0; j < mem_->size(); ++j) {
+                double t0 = 0, t1 = tmax;
+                if (mem_->near_interval(o, w, j, t0, t1)) iv[std::size_t(n++)] = {t0, t1};
+            }
         }
         if (n == 0) return tr;
         for (int i = 1; i < n; ++i)  // insertion sort by start (n <= capacity)
@@ -301,7 +335,7 @@ class FlightMemoryMedium {
                 a += sample_exponential(rng.uniform<double>(), lambda);
                 if (!(a < b)) break;
                 const Vec3d q = o + a * w;
-                const double f = mem_->shadowed_fraction(q, fr.s, fr.t);
+                const double f = mem_->shadowed_fraction(q, fr.s, fr.t, region_);
                 if (f <= 0) continue;
                 for (std::size_t c = 0; c < S::size; ++c) factor[c] *= F(1.0 + double(sig[c]) * f / lambda);
             }
@@ -312,6 +346,7 @@ class FlightMemoryMedium {
    private:
     const M* base_;
     FlightMemory* mem_;
+    Region region_;
 };
 
 }  // namespace grainlight
