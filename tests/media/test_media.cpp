@@ -295,3 +295,69 @@ TEST_CASE("Flight memory medium: free flights, shadow rays and the rate integral
         }
     }
 }
+
+namespace {
+// Grain centres only below the plane y = 0 (a half-space aggregate's boundary).
+struct BelowPlane {
+    [[nodiscard]] bool inside(const Vec3d& x) const noexcept { return x.y < 0.0; }
+    [[nodiscard]] bool deep(const Vec3d& x, double r) const noexcept { return x.y <= -r; }
+    static constexpr bool constrains = true;
+};
+}  // namespace
+
+TEST_CASE("Flight memory medium near the boundary: no grain centre outside it", "[media][flight-memory]") {
+    FlightMemory mem;
+    mem.radius = 1.0;
+    mem.push(Vec3d(0, -5, 0), Vec3d(0, -4, 0));  // a flight far below: only the boundary acts here
+    SECTION("a flight along the surface at depth h: the disc's segment above the surface is empty") {
+        const Frame<double> fr(Vec3d(1, 0, 0));
+        for (double h : {0.0, 0.3, 0.6, 0.9, 1.5}) {
+            const double a = h < 1 ? std::acos(h) - h * std::sqrt(1 - h * h) : 0.0;  // segment area, R = 1
+            INFO("h = " << h);
+            // 32 disc points resolve a thin circular segment to one or two points (0.03-0.06).
+            CHECK(mem.shadowed_fraction(Vec3d(0, -h, 0), fr.s, fr.t, BelowPlane{}) == Approx(a / pi_v<double>).margin(0.06));
+            CHECK(mem.shadowed_fraction(Vec3d(0, -h, 0), fr.s, fr.t) == 0.0);  // without the region
+        }
+    }
+    SECTION("free flights, shadow rays and the rate integral agree") {
+        using M = ContinuousMedium<IsotropicPhase<float, RGB>, RGB>;
+        const M base(RGB{0.5f, 1.0f, 2.0f}, RGB{0.9f, 0.7f, 0.5f}, {});
+        FlightMemory mem0;
+        mem0.radius = 1.0;
+        mem0.push(Vec3d(-3, -0.4, 0), Vec3d(0, -0.4, 0));
+        // Leaves at 20 deg from the way back, 0.4 below the surface and rising slightly.
+        const double th = 20.0 * pi_v<double> / 180.0;
+        const Vec3d w = glm::normalize(Vec3d(-std::cos(th), 0.05, std::sin(th)));
+        const Vec3d o(0, -0.4, 0);
+        const Ray<float> ray{Vec3f(o), Vec3f(w)};
+        const double s = 3.0;
+        const Frame<double> fr(w);
+        double integral_f = 0, integral_tubes = 0;
+        const int nq = 4000;
+        for (int i = 0; i < nq; ++i) {
+            const Vec3d q = o + (i + 0.5) * s / nq * w;
+            integral_f += mem0.shadowed_fraction(q, fr.s, fr.t, BelowPlane{}) * s / nq;
+            integral_tubes += mem0.shadowed_fraction(q, fr.s, fr.t) * s / nq;
+        }
+        REQUIRE(integral_f > integral_tubes + 0.3);  // the boundary adds to the memory here
+        const int n = 100000;
+        std::array<Welford, 3> tr, esc;
+        auto rng = Pcg32::from_key(12);
+        for (int i = 0; i < n; ++i) {
+            FlightMemory m1 = mem0;
+            const FlightMemoryMedium<M, BelowPlane> m(base, &m1, BelowPlane{});
+            const RGB t = m.transmittance(ray, float(s), rng);
+            const auto it = m.sample_interaction(ray, float(s), rng);
+            for (std::size_t c = 0; c < 3; ++c) {
+                tr[c].add(double(t[c]));
+                esc[c].add(it.is_escape() ? double(it.weight[c]) : 0.0);
+            }
+        }
+        for (std::size_t c = 0; c < 3; ++c) {
+            const double exact = std::exp(-double(base.sigma_t()[c]) * (s - integral_f));
+            INFO("channel " << c << ": exact " << exact << ", transmittance " << tr[c].mean() << ", escapes " << esc[c].mean());
+            CHECK(std::abs(tr[c].mean() - exact) < 4 * tr[c].standard_error() + 1e-3);
+            CHECK(std::abs(esc[c].mean() - exact) < 4 * esc[c].standard_error() + 1e-3);
+        }
+    }
+}
