@@ -301,6 +301,7 @@ namespace {
 struct BelowPlane {
     [[nodiscard]] bool inside(const Vec3d& x) const noexcept { return x.y < 0.0; }
     [[nodiscard]] bool deep(const Vec3d& x, double r) const noexcept { return x.y <= -r; }
+    [[nodiscard]] double dist(const Vec3d& x) const noexcept { return -x.y; }
     static constexpr bool constrains = true;
 };
 }  // namespace

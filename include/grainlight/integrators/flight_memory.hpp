@@ -28,6 +28,8 @@ struct CentresInside {
     [[nodiscard]] bool inside(const Vec3d& x) const noexcept { return shape->inside(x); }
     /// Whether the ball of radius r about x is inside the boundary.
     [[nodiscard]] bool deep(const Vec3d& x, double r) const noexcept { return ball_inside(*distance, x, r); }
+    /// Distance from x to the boundary (the distance query's value).
+    [[nodiscard]] double dist(const Vec3d& x) const noexcept { return (*distance)(x); }
     /// It constrains (see AnyCentre).
     static constexpr bool constrains = true;
 };

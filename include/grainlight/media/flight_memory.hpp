@@ -50,13 +50,16 @@
 namespace grainlight {
 
 /// Where grain centres may lie, for FlightMemoryMedium: everywhere (no boundary constraint).
-/// A region type has `inside(x)` (a grain centre may lie at x) and `deep(x, r)` (every point
-/// within r of x is inside; then `inside` need not be asked there).
+/// A region type has `inside(x)` (a grain centre may lie at x), `deep(x, r)` (every point
+/// within r of x is inside; then `inside` need not be asked there), `dist(x)` (a lower bound
+/// of the distance from an inside point x to the boundary) and `constrains`.
 struct AnyCentre {
     /// Always true.
     [[nodiscard]] constexpr bool inside(const Vec3d&) const noexcept { return true; }
     /// Always true.
     [[nodiscard]] constexpr bool deep(const Vec3d&, double) const noexcept { return true; }
+    /// Distance from x to the region's boundary (inside: >= 0): infinite.
+    [[nodiscard]] double dist(const Vec3d&) const noexcept { return std::numeric_limits<double>::infinity(); }
     /// Whether the region constrains anything (false: the medium skips the tests).
     static constexpr bool constrains = false;
 };
@@ -255,7 +258,14 @@ class FlightMemoryMedium {
         const Frame<double> fr(w);
         S weight(F(1));
         double t = 0;
-        for (;;) {
+        for (int nulls = 0;; ++nulls) {
+            if (nulls > kMaxNulls) {  // safety net (no realistic flight comes near it): end the path
+                it.kind = EventKind::absorb;
+                it.t = F(t);
+                it.p = ray(F(t));
+                it.weight = S(F(0));
+                return it;
+            }
             t += sample_exponential(rng.uniform<double>(), s_max);
             if (!(t < double(t_max))) {
                 it.kind = EventKind::escape;
@@ -266,7 +276,19 @@ class FlightMemoryMedium {
             }
             const Vec3d q = o + t * w;
             bool look = mem_->near(q);
-            if constexpr (Region::constrains) look = look || !region_.deep(q, mem_->radius);
+            if constexpr (Region::constrains) {
+                if (!std::isfinite(double(t_max)) && !region_.inside(q)) {
+                    // Left the region along a ray that meets no boundary (a point the scene puts
+                    // inside the medium but the region does not, at rounding level): no grain
+                    // lies ahead, so the flight escapes.
+                    it.kind = EventKind::escape;
+                    it.t = t_max;
+                    it.p = ray(F(t));
+                    it.weight = weight;
+                    return it;
+                }
+                look = look || !region_.deep(q, mem_->radius);
+            }
             const double rho = 1.0 - (look ? mem_->shadowed_fraction(q, fr.s, fr.t, region_) : 0.0);
             const double p_collide = rho * s_avg / s_max;
             if (rng.uniform<double>() < p_collide) {
@@ -310,40 +332,58 @@ class FlightMemoryMedium {
         // Stretches of the ray within 2R of a remembered flight (elsewhere f = 0).
         std::array<std::array<double, 2>, FlightMemory::capacity> iv{};
         int n = 0;
-        if constexpr (Region::constrains) {
-            // Near the boundary anywhere along the segment: one stretch, the whole segment
-            // (shadowed_fraction asks region.deep first).
-            iv[std::size_t(n++)] = {0.0, std::min(tmax, 1e6 * mem_->radius)};
-        } else {
-            for (int j = 0; j < mem_->size(); ++j) {
-                double t0 = 0, t1 = tmax;
-                if (mem_->near_interval(o, w, j, t0, t1)) iv[std::size_t(n++)] = {t0, t1};
-            }
+        for (int j = 0; j < mem_->size(); ++j) {
+            double t0 = 0, t1 = tmax;
+            if (mem_->near_interval(o, w, j, t0, t1)) iv[std::size_t(n++)] = {t0, t1};
         }
-        if (n == 0) return tr;
+        if (n == 0 && !Region::constrains) return tr;
         for (int i = 1; i < n; ++i)  // insertion sort by start (n <= capacity)
             for (int j = i; j > 0 && iv[std::size_t(j)][0] < iv[std::size_t(j - 1)][0]; --j) std::swap(iv[std::size_t(j)], iv[std::size_t(j - 1)]);
+        int m = 0;  // merge overlapping stretches
+        for (int i = 0; i < n; ++i) {
+            if (m > 0 && iv[std::size_t(i)][0] <= iv[std::size_t(m - 1)][1])
+                iv[std::size_t(m - 1)][1] = std::max(iv[std::size_t(m - 1)][1], iv[std::size_t(i)][1]);
+            else
+                iv[std::size_t(m++)] = iv[std::size_t(i)];
+        }
+        n = m;
         const Frame<double> fr(w);
         S factor(F(1));
-        double covered = 0;  // end of the stretch already sampled (merging overlaps)
-        for (int i = 0; i < n; ++i) {
-            double a = std::max(iv[std::size_t(i)][0], covered);
-            const double b = iv[std::size_t(i)][1];
-            if (b <= a) continue;
-            covered = b;
-            for (;;) {
-                a += sample_exponential(rng.uniform<double>(), lambda);
-                if (!(a < b)) break;
-                const Vec3d q = o + a * w;
-                const double f = mem_->shadowed_fraction(q, fr.s, fr.t, region_);
-                if (f <= 0) continue;
-                for (std::size_t c = 0; c < S::size; ++c) factor[c] *= F(1.0 + double(sig[c]) * f / lambda);
+        // One Poisson process of candidates at rate lambda along the segment; stretches where f
+        // is 0 (away from every remembered flight and, with a region, more than R inside its
+        // boundary) are skipped, which the process's lack of memory allows.
+        double u = 0;
+        int k = 0;  // the next tube stretch
+        for (int steps = 0; steps < kMaxNulls; ++steps) {
+            while (k < n && iv[std::size_t(k)][1] <= u) ++k;
+            const bool in_tube = k < n && iv[std::size_t(k)][0] <= u;
+            if (!in_tube) {
+                const double next_tube = k < n ? iv[std::size_t(k)][0] : tmax;
+                if constexpr (Region::constrains) {
+                    const double skip = region_.dist(o + u * w) - mem_->radius;
+                    if (skip > 0.5 * mem_->radius) {
+                        u = std::min(u + skip, next_tube);
+                        if (u >= tmax) break;
+                        continue;
+                    }
+                } else {
+                    if (k >= n) break;
+                    u = next_tube;
+                    continue;
+                }
             }
+            u += sample_exponential(rng.uniform<double>(), lambda);
+            if (!(u < tmax)) break;
+            const Vec3d q = o + u * w;
+            const double f = mem_->shadowed_fraction(q, fr.s, fr.t, region_);
+            if (f <= 0) continue;
+            for (std::size_t c = 0; c < S::size; ++c) factor[c] *= F(1.0 + double(sig[c]) * f / lambda);
         }
         return tr * factor;
     }
 
    private:
+    static constexpr int kMaxNulls = 1 << 20;  ///< null collisions per flight at most
     const M* base_;
     FlightMemory* mem_;
     Region region_;
