@@ -218,8 +218,10 @@ struct HybridOptions {
     int flight_memory_flights = 8;
     /// While the memory is active, no grain centre lies outside the aggregate's boundary: a flight
     /// near the boundary collides less (the part of its collision disc outside holds no centre).
-    /// Needs the boundary: hybrid_bundle and the switch calibration pass it (CentresInside).
-    bool flight_memory_boundary = true;
+    /// Needs the boundary: hybrid_bundle and the switch calibration pass it (CentresInside). Off
+    /// by default: with a mesh boundary every candidate collision and shadow-ray step asks the
+    /// mesh distance, which made the 400-R snowman's EPT+VPT 5x slower (docs/meng15_hybrid.md).
+    bool flight_memory_boundary = false;
     double acceptance = 1.0;        ///< P_a in (0, 1]
     EptOptions ept{};               ///< EPT part (events budget, roulette, NEE)
     VptOptions vpt{};               ///< VPT part (depth, roulette, NEE)
