@@ -77,19 +77,22 @@ bool roulette(T& beta_max_scaled, double b_max, gl::Rng& rng, int depth) {
     return true;
 }
 
+/// A scattering event of the effective medium in channel c: albedo, a direction from its phase
+/// function (throughput b, direction w updated).
+void scatter_effective(const m15::Grains& g, std::size_t c, gl::Vec3d& w, double& b, gl::Rng& rng) {
+    b *= g.rte.alpha_s[c];
+    const auto ps = g.medium.phase().sample(gl::Vec3f(w), rng.uniform2<float>());
+    b *= double(ps.weight[c]);
+    w = glm::normalize(gl::Vec3d(ps.w));
+}
+
 /// VPT of the effective medium in the half-space y < 0, one colour channel c, no NEE (the sky is
 /// reached by escaping): returns the escaping throughput. `scatter_first`: the walk starts with a
 /// scattering event at p (the hybrid's switch at a grain hit), else with a flight.
 double vpt_walk(const m15::Grains& g, std::size_t c, gl::Vec3d p, gl::Vec3d w, double b, bool scatter_first, gl::Rng& rng,
                 gl::Vec3d& w_escape) {
-    const double sig = g.rte.sigma_t[c], alb = g.rte.alpha_s[c];
-    const auto& phase = g.medium.phase();
-    auto scatter = [&]() {
-        b *= alb;
-        const auto ps = phase.sample(gl::Vec3f(w), rng.uniform2<float>());
-        b *= double(ps.weight[c]);
-        w = glm::normalize(gl::Vec3d(ps.w));
-    };
+    const double sig = g.rte.sigma_t[c];
+    auto scatter = [&]() { scatter_effective(g, c, w, b, rng); };
     if (scatter_first) scatter();
     w_escape = w;
     for (int depth = 0; depth < 100000; ++depth) {
@@ -120,15 +123,9 @@ struct SegHistory {
 /// where no grain has its centre); 32 points of the disc (Vogel spiral).
 double vpt_walk_memk(const m15::Grains& g, int K, int E, bool boundary, std::size_t c, gl::Vec3d p, gl::Vec3d w, double b,
                      SegHistory h, gl::Rng& rng) {
-    const double sig = g.rte.sigma_t[c], alb = g.rte.alpha_s[c];
+    const double sig = g.rte.sigma_t[c];
     const double R = 1.0;
-    const auto& phase = g.medium.phase();
-    auto scatter = [&]() {
-        b *= alb;
-        const auto ps = phase.sample(gl::Vec3f(w), rng.uniform2<float>());
-        b *= double(ps.weight[c]);
-        w = glm::normalize(gl::Vec3d(ps.w));
-    };
+    auto scatter = [&]() { scatter_effective(g, c, w, b, rng); };
     constexpr int N = 32;
     std::array<gl::Vec2d, N> disc;
     for (int i = 0; i < N; ++i) {

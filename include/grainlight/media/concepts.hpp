@@ -16,6 +16,7 @@
 /// survival probabilities go there; a grey analog medium always gives weight 1).
 #pragma once
 
+#include <algorithm>
 #include <concepts>
 #include <cstdint>
 
@@ -67,6 +68,23 @@ struct Interaction {
     /// True if the path was absorbed.
     [[nodiscard]] bool is_absorb() const noexcept { return kind == EventKind::absorb; }
 };
+
+/// Ends a collision whose scattering weight per channel is `w_scatter` (sigma_s T / pdf, the
+/// albedo in a grey medium): scatter with probability q = min(1, largest channel of w_scatter),
+/// weight w_scatter / q, NEE by the phase function; else absorb (weight 0). Every channel then
+/// carries w_c / q <= 1 per event (media/continuous.hpp says why the largest channel, not the mean).
+template <std::floating_point F, class S>
+inline void resolve_collision(Interaction<F, S>& it, const S& w_scatter, Rng& rng) noexcept {
+    const F q = std::min(F(1), w_scatter.max_value());
+    if (q > F(0) && rng.uniform<F>() < q) {
+        it.kind = EventKind::scatter;
+        it.weight = w_scatter / q;
+        it.nee = NeeKind::phase;
+    } else {
+        it.kind = EventKind::absorb;
+        it.weight = S(F(0));
+    }
+}
 
 /// A participating medium usable by the walk kernel.
 template <class M>

@@ -110,15 +110,7 @@ public:
             const S dens = sigma_t_ * tr;
             w_scatter = sigma_s() * tr / dens.average();
         }
-        const F q = std::min(F(1), w_scatter.max_value());
-        if (q > F(0) && rng.uniform<F>() < q) {
-            it.kind = EventKind::scatter;
-            it.weight = w_scatter / q;
-            it.nee = NeeKind::phase;
-        } else {
-            it.kind = EventKind::absorb;
-            it.weight = S(F(0));
-        }
+        resolve_collision(it, w_scatter, rng);
         return it;
     }
 

@@ -275,7 +275,6 @@ class FlightMemoryMedium {
                 return it;
             }
             const Vec3d q = o + t * w;
-            bool look = mem_->near(q);
             if constexpr (Region::constrains) {
                 if (!std::isfinite(double(t_max)) && !region_.inside(q)) {
                     // Left the region along a ray that meets no boundary (a point the scene puts
@@ -287,9 +286,9 @@ class FlightMemoryMedium {
                     it.weight = weight;
                     return it;
                 }
-                look = look || !region_.deep(q, mem_->radius);
             }
-            const double rho = 1.0 - (look ? mem_->shadowed_fraction(q, fr.s, fr.t, region_) : 0.0);
+            // 0 unless q is within 2R of a remembered flight or (with a region) R of the boundary.
+            const double rho = 1.0 - mem_->shadowed_fraction(q, fr.s, fr.t, region_);
             const double p_collide = rho * s_avg / s_max;
             if (rng.uniform<double>() < p_collide) {
                 // Collision: weight sigma_s^k / (rho sigma_avg) * rho = albedo^k sigma_t^k / sigma_avg.
@@ -299,15 +298,7 @@ class FlightMemoryMedium {
                 it.p = Vec3<F>(q);
                 mem_->push(o, q);
                 --mem_->flights_left;
-                const F pq = std::min(F(1), ws.max_value());
-                if (pq > F(0) && rng.uniform<F>() < pq) {
-                    it.kind = EventKind::scatter;
-                    it.weight = ws / pq;
-                    it.nee = NeeKind::phase;
-                } else {
-                    it.kind = EventKind::absorb;
-                    it.weight = S(F(0));
-                }
+                resolve_collision(it, ws, rng);
                 return it;
             }
             // Null collision: weight (s_max - rho sigma^k) / (s_max - rho sigma_avg) per channel.
