@@ -113,7 +113,8 @@ inline SceneT make_lit_scene(float R) {
 /// VPT continuation after k = 1..6 interactions, the smallest k within `tolerance`). Prints one
 /// line labelled `name`.
 inline int calibrate_min_ept(const Grains& g, std::uint64_t seed, int threads, const std::string& name,
-                             int flight_memory = gl::HybridOptions{}.flight_memory, double tolerance = 0.03) {
+                             int flight_memory = gl::HybridOptions{}.flight_memory,
+                             bool flight_memory_boundary = gl::HybridOptions{}.flight_memory_boundary, double tolerance = 0.03) {
     const double absorbed = 1.0 - std::min({g.rte.alpha_s[0], g.rte.alpha_s[1], g.rte.alpha_s[2]});
     if (absorbed < 2e-3) {
         // A half-space of (nearly) lossless grains returns (nearly) all light in both EPT and the
@@ -127,6 +128,7 @@ inline int calibrate_min_ept(const Grains& g, std::uint64_t seed, int threads, c
     o.threads = threads;
     o.tolerance = tolerance;
     o.flight_memory = flight_memory;
+    o.flight_memory_boundary = flight_memory_boundary;
     const gl::SwitchCalibration c = gl::calibrate_min_ept_interactions(
         g.tile, {gl::GrainExemplar::procedural(g.preset.shape, g.preset.radius, g.preset.material, g.preset.seed, g.level)}, {1.0},
         seed, g.medium, o);

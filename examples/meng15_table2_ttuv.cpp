@@ -111,6 +111,7 @@ struct RunConfig {
     double tau = 4.0;      ///< --tau: Eq. 5's bundle-spread threshold [grain radii]
     double switch_depth = 0;  ///< --switch-depth: smallest boundary distance of a switch [grain radii]
     int flight_memory = gl::HybridOptions{}.flight_memory;  ///< --flight-memory: flights the VPT remembers (0: memoryless)
+    bool flight_memory_boundary = gl::HybridOptions{}.flight_memory_boundary;  ///< --flight-memory-boundary
 };
 
 // One scene: one or more panels (equal sizes) measured as one image (meng15_scenes.hpp).
@@ -143,6 +144,7 @@ SceneResult run_scene(const Example& ex, const std::string& key, const std::vect
         opt.tau = rc.tau;
         opt.min_switch_depth = rc.switch_depth;  // grain radius 1 in every scene
         opt.flight_memory = rc.flight_memory;
+        opt.flight_memory_boundary = rc.flight_memory_boundary;
         double Pa = 1.0;
         std::vector<double> Pa_panel;
         if (t.opt && rc.pa_pinned > 0) {
@@ -286,6 +288,9 @@ int main(int argc, char** argv) {
         const int flight_memory = ex.opt<int>(
             "flight-memory", gl::HybridOptions{}.flight_memory,
             "flights of the path the VPT remembers (media/flight_memory.hpp; 0: Meng15's memoryless effective medium)");
+        const bool memory_boundary = ex.opt<bool>(
+            "flight-memory-boundary", gl::HybridOptions{}.flight_memory_boundary,
+            "while the memory is active, no grain centre outside the aggregate's boundary (HybridOptions::flight_memory_boundary)");
         const auto pa_given = ex.opt_optional<double>(
             "pa", "pin P_a of the 'P_a opt' techniques to this value in (0, 1] (no preview; reproducible images)");
         ex.checkpointable();  // --checkpoint SECONDS / --resume: one checkpoint per scene, technique and panel
@@ -349,6 +354,7 @@ int main(int argc, char** argv) {
         rc.tau = tau;
         rc.switch_depth = switch_depth;
         rc.flight_memory = flight_memory;
+        rc.flight_memory_boundary = memory_boundary;
         const int height = std::max(6, width * 3 / 4);
 
         const meng15::Grains g = meng15::make_snow_grains(ex.seed(), ex.full(), absorption, level);
@@ -364,7 +370,7 @@ int main(int argc, char** argv) {
         int snow_k = 0;  // --min-ept auto: the snow grains' calibrated count (computed once)
         auto snow_min_ept = [&]() {
             if (!min_ept_auto) return 0;
-            if (snow_k == 0) snow_k = meng15::calibrate_min_ept(g, ex.seed(), ex.threads(), "snow grains", flight_memory);
+            if (snow_k == 0) snow_k = meng15::calibrate_min_ept(g, ex.seed(), ex.threads(), "snow grains", flight_memory, memory_boundary);
             return snow_k;
         };
         auto note_min_ept = [&](const std::string& name, int k) {
@@ -384,7 +390,7 @@ int main(int argc, char** argv) {
                 for (const auto& h : heaps) std::printf(" %s %.4f / %.2f R", h->name.c_str(), h->grains.stats.alpha_s(1), h->grains.diffusion.d_DA);
                 std::printf("\n");
                 for (const auto& h : heaps) {
-                    if (min_ept_auto) h->min_ept = meng15::calibrate_min_ept(h->grains, ex.seed(), ex.threads(), h->name, flight_memory);
+                    if (min_ept_auto) h->min_ept = meng15::calibrate_min_ept(h->grains, ex.seed(), ex.threads(), h->name, flight_memory, memory_boundary);
                     note_min_ept("spices " + h->name, h->min_ept);
                 }
                 r = run_scene(ex, key, meng15::panels_of(heaps), rc, 0);
@@ -394,7 +400,7 @@ int main(int argc, char** argv) {
                             "albedo %.4f, d_DA = %.2f R)\n",
                             castle, sc[0]->mesh.triangle_count(), sc[0]->grain_count, sc[0]->grains.stats.alpha_s(1),
                             sc[0]->grains.diffusion.d_DA);
-                if (min_ept_auto) sc[0]->min_ept = meng15::calibrate_min_ept(sc[0]->grains, ex.seed(), ex.threads(), "sand grains", flight_memory);
+                if (min_ept_auto) sc[0]->min_ept = meng15::calibrate_min_ept(sc[0]->grains, ex.seed(), ex.threads(), "sand grains", flight_memory, memory_boundary);
                 note_min_ept(key, sc[0]->min_ept);
                 r = run_scene(ex, key, meng15::panels_of(sc), rc, 1);
             } else if (key == "glass_bead_cube") {
@@ -404,7 +410,7 @@ int main(int argc, char** argv) {
                             beads, cube->L, cube->grains.stats.alpha_s(1), cube->grains.diffusion.d_DA);
                 auto pans = cube->panels();
                 if (min_ept_auto)
-                    for (auto& pn : pans) pn.min_ept = meng15::calibrate_min_ept(cube->grains, ex.seed(), ex.threads(), "glass beads", flight_memory);
+                    for (auto& pn : pans) pn.min_ept = meng15::calibrate_min_ept(cube->grains, ex.seed(), ex.threads(), "glass beads", flight_memory, memory_boundary);
                 note_min_ept(key, pans.empty() ? 0 : pans[0].min_ept);
                 r = run_scene(ex, key, pans, rc, -1);
             } else if (key == "snow_sphere") {
@@ -490,7 +496,7 @@ int main(int argc, char** argv) {
         // Last line: {"scenes": {...}} first (the issue's shape), then the run's metadata.
         Json meta = ex.summary();
         meta.num("d_DA", g.diffusion.d_DA).integer("spp", spp).str("min_ept_rule", min_ept_auto ? "auto" : min_ept_arg);
-        meta.raw("min_ept", "{" + min_ept_json + "}").integer("flight_memory", flight_memory);
+        meta.raw("min_ept", "{" + min_ept_json + "}").integer("flight_memory", flight_memory).boolean("flight_memory_boundary", memory_boundary);
         meng15::rank_rows(meta, ex, height);
         return ex.finish_line("{\"scenes\":{" + scenes_json + "}," + meta.str().substr(1));
     });

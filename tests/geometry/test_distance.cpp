@@ -129,6 +129,47 @@ TEST_CASE("the largest ball that fits never crosses a mesh surface (random point
     }
 }
 
+TEST_CASE("MeshDistance::inside_near equals the parity inside test per point near the surface", "[geometry][distance][property]") {
+    // Independent reference: MeshBoundary's three full parity rays per point (inside()).
+    Rng rng = Rng::from_key(104);
+    int declined = 0, compared = 0, mixed = 0;
+    for (GrainShape shape : {GrainShape::snow, GrainShape::crystal, GrainShape::rice}) {
+        const TriangleMesh<double> mesh = make_grain_mesh<double>(shape, 1.0, 11, 3);
+        const MeshDistance md(mesh);
+        const Aabb<double> b = md.bounds();
+        for (int k = 0; k < 300; ++k) {
+            const Vec3d q = b.lo + rng.uniform3<double>() * b.extent();
+            const double r = 0.03 + 0.12 * rng.uniform<double>();  // facets are ~0.1 across
+            if (!md.any_within(q, r)) continue;  // only balls that reach the surface are of interest
+            std::array<Vec3d, 32> x;
+            for (auto& xi : x) xi = q + sample_uniform_sphere(rng.uniform2<double>()) * (r * std::cbrt(rng.uniform<double>()));
+            std::array<bool, 32> out{};
+            if (!md.inside_near(q, r, md.inside(q), x.data(), 32, out.data())) {
+                ++declined;
+                continue;
+            }
+            int in = 0;
+            for (std::size_t i = 0; i < x.size(); ++i) {
+                INFO("q = (" << q.x << ", " << q.y << ", " << q.z << "), r = " << r << ", point " << i);
+                REQUIRE(out[i] == md.inside(x[i]));
+                in += out[i] ? 1 : 0;
+                ++compared;
+            }
+            mixed += in > 0 && in < 32;
+        }
+    }
+    REQUIRE(compared > 5000);
+    REQUIRE(mixed > 100);  // the balls do straddle the surface
+    REQUIRE(declined < compared / 32 / 4);  // it rarely declines at these radii
+    // More triangles within r than it gathers: it declines (the caller asks inside() per point).
+    const MeshDistance fine(make_icosphere<double>(5));  // 20480 facets on the unit sphere
+    const Vec3d p(0.0, 0.0, 0.9);
+    std::array<bool, 1> o{};
+    const Vec3d x1(0.0, 0.0, 1.2);
+    REQUIRE_FALSE(fine.inside_near(p, 0.5, true, &x1, 1, o.data()));
+    REQUIRE(fine.inside_near(p, 0.12, true, &x1, 0, o.data()));
+}
+
 TEST_CASE("analytic distances and bad input", "[geometry][distance]") {
     const SlabDistance slab{2.0};
     REQUIRE(slab(Vec3d(0, 0, -0.5)) == Approx(0.5));

@@ -102,6 +102,15 @@ struct RecordingDistance {
     }
 };
 
+// A mesh region without `classify`: MeshBoundary's parity test per disc point.
+struct PerPointRegion {
+    const CentresInside<MeshBoundary, MeshDistance>* r;
+    [[nodiscard]] bool inside(const Vec3d& x) const noexcept { return r->inside(x); }
+    [[nodiscard]] bool deep(const Vec3d& x, double rr) const noexcept { return ball_inside(*r->distance, x, rr); }
+    [[nodiscard]] double dist(const Vec3d& x) const noexcept { return (*r->distance)(x); }
+    static constexpr bool constrains = true;
+};
+
 }  // namespace
 
 TEST_CASE("MeshDistance::ball_inside: never true closer to the mesh than r (brute force over all triangles)",
@@ -145,6 +154,51 @@ TEST_CASE("MeshDistance::ball_inside: never true closer to the mesh than r (brut
         REQUIRE(th <= md.exit_distance(p, w) + md.exit_distance(p, -w) + 1e-9);
         REQUIRE(th >= 2 * md(p) - 1e-9);  // each side's depth >= the distance to the surface
     }
+}
+
+TEST_CASE("Flight memory near a mesh boundary: the disc classified at once equals per-point parity tests",
+          "[hybrid][mesh][flight-memory]") {
+    // CentresInside<MeshBoundary, MeshDistance> classifies the collision disc by segment parity
+    // against the triangles near its centre (MeshDistance::inside_near); the same region without
+    // `classify` asks MeshBoundary's full parity test per disc point. Both must give the same
+    // shadowed fraction, with and without remembered flights.
+    const TriangleMesh<double> mesh = blob_obj(10.0, "grainlight_test_blob_fm.obj");
+    const MeshBoundary shape(mesh);
+    const MeshDistance md(mesh);
+    const CentresInside<MeshBoundary, MeshDistance> fast{&shape, &md};
+    const PerPointRegion slow{&fast};
+    Rng rng = Rng::from_key(2024, 7, 0);
+    const Aabb<double> b = md.bounds();
+    int edge = 0, partial = 0;
+    FlightMemory wanderer;  // keeps its safe ball (FlightMemory::boundary_distance) from point to point
+    for (int k = 0; k < 4000 && edge < 400; ++k) {
+        const Vec3d q = b.lo + rng.uniform3<double>() * b.extent();
+        if (!md.inside(q)) continue;
+        const double R = 0.2 + 0.6 * rng.uniform<double>();
+        FlightMemory mem;
+        mem.radius = R;
+        if (k % 2) mem.push(q - 3.0 * R * sample_uniform_sphere(rng.uniform2<double>()), q);
+        const Frame<double> fr(sample_uniform_sphere(rng.uniform2<double>()));
+        const double f_fast = mem.shadowed_fraction(q, fr.s, fr.t, fast);
+        const double f_slow = mem.shadowed_fraction(q, fr.s, fr.t, slow);
+        INFO("q " << q.x << " " << q.y << " " << q.z << " R " << R);
+        REQUIRE(f_fast == f_slow);
+        // The safe ball of earlier queries (other points, other radii) changes nothing.
+        FlightMemory fresh = mem;
+        fresh.forget_region();
+        wanderer.radius = R;
+        wanderer.count = 0;
+        if (mem.count > 0) wanderer.push(mem.from[0], mem.to[0]);
+        REQUIRE(wanderer.shadowed_fraction(q, fr.s, fr.t, fast) == fresh.shadowed_fraction(q, fr.s, fr.t, slow));
+        REQUIRE(fast.deep(q, R) == slow.deep(q, R));
+        REQUIRE(fast.dist(q) == Approx(slow.dist(q)).margin(1e-12));
+        if (!slow.deep(q, R)) {
+            ++edge;
+            partial += f_slow > 0 && f_slow < 1;
+        }
+    }
+    REQUIRE(edge >= 100);
+    REQUIRE(partial >= 50);
 }
 
 TEST_CASE("Mesh-boundary hybrid: the DA switch fires only >= d_DA from the mesh; EPT+VPT(+DA) vs EPT",

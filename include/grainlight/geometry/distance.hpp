@@ -330,6 +330,57 @@ public:
         return z_r + z_a;
     }
 
+    /// Most triangles `inside_near` gathers (it declines beyond).
+    static constexpr int near_capacity = 64;
+    /// Which of the points x[0..n) lie inside, for points within r of p (|x[i] - p| <= r) whose
+    /// own side is `p_inside`: out[i] = p_inside xor (the segment p -> x[i] crosses the surface
+    /// an odd number of times), counted against the triangles within r of p only (one range
+    /// search for all points instead of `inside`'s three full parity rays per point; the
+    /// watertight test counts a crossing through a shared edge once). Returns false, leaving
+    /// `out` unspecified, when more than `near_capacity` triangles lie within r (ask `inside` per
+    /// point then). Used by the flight memory's collision disc near a mesh boundary
+    /// (integrators/flight_memory.hpp).
+    [[nodiscard]] bool inside_near(const Vec3d& p, double r, bool p_inside, const Vec3d* x, int n, bool* out) const noexcept {
+        std::array<std::uint32_t, near_capacity> near;
+        int m = 0;
+        const double r2 = r * r * (1.0 + 1e-9);  // never miss a triangle within r by rounding
+        const auto& nodes = data_->nodes;
+        std::uint32_t stack[128];
+        int sp = 0;
+        stack[sp++] = 0;
+        while (sp > 0) {
+            const Node& nd = nodes[stack[--sp]];
+            if (distance2_to_box(nd.box, p) >= r2) continue;
+            if (nd.count > 0) {
+                for (std::uint32_t i = nd.first; i < nd.first + nd.count; ++i) {
+                    const auto& t = data_->tris[i];
+                    const Vec3d q = closest_point_on_triangle(p, t[0], t[1], t[2]);
+                    if (glm::dot(q - p, q - p) >= r2) continue;
+                    if (m == near_capacity) return false;
+                    near[std::size_t(m++)] = i;
+                }
+                continue;
+            }
+            if (sp + 2 > 128) return false;  // cannot happen for balanced trees
+            stack[sp++] = nd.first;
+            stack[sp++] = nd.first + 1;
+        }
+        for (int i = 0; i < n; ++i) {
+            const Vec3d d = x[i] - p;
+            int crossings = 0;
+            if (m > 0 && glm::dot(d, d) > 0) {
+                const WatertightRay<double> wr(p, d);
+                double t = 0, b1 = 0, b2 = 0;
+                for (int k = 0; k < m; ++k) {
+                    const auto& tri = data_->tris[near[std::size_t(k)]];
+                    crossings += intersect_triangle_watertight(wr, tri[0], tri[1], tri[2], 0.0, 1.0, t, b1, b2) ? 1 : 0;
+                }
+            }
+            out[i] = p_inside != ((crossings & 1) != 0);
+        }
+        return true;
+    }
+
     /// Unsigned distance from p to the surface.
     [[nodiscard]] double unsigned_distance(const Vec3d& p) const noexcept { return nearest(p).distance; }
     /// p strictly inside (ray parity, MeshBoundary::inside).

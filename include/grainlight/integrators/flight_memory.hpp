@@ -26,10 +26,32 @@ struct CentresInside {
     const Distance* distance = nullptr;  ///< distance to the boundary
     /// Whether a grain centre may lie at x.
     [[nodiscard]] bool inside(const Vec3d& x) const noexcept { return shape->inside(x); }
-    /// Whether the ball of radius r about x is inside the boundary.
-    [[nodiscard]] bool deep(const Vec3d& x, double r) const noexcept { return ball_inside(*distance, x, r); }
-    /// Distance from x to the boundary (the distance query's value).
-    [[nodiscard]] double dist(const Vec3d& x) const noexcept { return (*distance)(x); }
+    /// Whether the ball of radius r about the medium point x (inside) is inside the boundary:
+    /// no surface within r (MeshDistance::any_within, no parity test), else `ball_inside`.
+    [[nodiscard]] bool deep(const Vec3d& x, double r) const noexcept {
+        if constexpr (requires { { distance->any_within(x, r) } -> std::convertible_to<bool>; })
+            return !distance->any_within(x, r);
+        else
+            return ball_inside(*distance, x, r);
+    }
+    /// Distance from the inside point x to the boundary (the unsigned distance where the query
+    /// has one: no parity test).
+    [[nodiscard]] double dist(const Vec3d& x) const noexcept {
+        if constexpr (requires { { distance->unsigned_distance(x) } -> std::convertible_to<double>; })
+            return distance->unsigned_distance(x);
+        else
+            return (*distance)(x);
+    }
+    /// out[i] = inside(x[i]) for n points within r of the medium point q (inside by
+    /// construction: a point of a flight before it meets the boundary), by the parity of the
+    /// segments q -> x[i] against the triangles near q (MeshDistance::inside_near); false (the
+    /// caller asks `inside` per point) for other distance queries or too many triangles near q.
+    [[nodiscard]] bool classify(const Vec3d& q, double r, const Vec3d* x, int n, bool* out) const noexcept {
+        if constexpr (requires { { distance->inside_near(q, r, true, x, n, out) } -> std::convertible_to<bool>; })
+            return distance->inside_near(q, r, true, x, n, out);
+        else
+            return false;
+    }
     /// It constrains (see AnyCentre).
     static constexpr bool constrains = true;
 };

@@ -580,6 +580,7 @@ template <LitScene Scene, class Distance, class Region = AnyCentre>
                   }) {
         if (history && opt.uses_flight_memory()) {
             FlightMemory mem = *history;
+            mem.forget_region();
             mem.remembered = opt.flight_memory;
             mem.flights_left = opt.flight_memory_flights;
             if constexpr (Region::constrains) {

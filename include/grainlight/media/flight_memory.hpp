@@ -50,9 +50,13 @@
 namespace grainlight {
 
 /// Where grain centres may lie, for FlightMemoryMedium: everywhere (no boundary constraint).
-/// A region type has `inside(x)` (a grain centre may lie at x), `deep(x, r)` (every point
-/// within r of x is inside; then `inside` need not be asked there), `dist(x)` (a lower bound
-/// of the distance from an inside point x to the boundary) and `constrains`.
+/// A region type has `inside(x)` (a grain centre may lie at x), `deep(x, r)` (for a point x of
+/// the medium, which lies inside: every point within r of x is inside), `dist(x)` (a lower
+/// bound of the distance from an inside point x to the boundary: the memory asks it, through
+/// its safe ball FlightMemory::boundary_distance, where the collision disc or a shadow ray may
+/// reach the boundary) and `constrains`; optionally `classify(q, r, x, n, out)` (out[i] =
+/// inside(x[i]) for n points within r of the medium point q, all at once; false if it
+/// declines), else the disc points near the boundary ask `inside` one by one.
 struct AnyCentre {
     /// Always true.
     [[nodiscard]] constexpr bool inside(const Vec3d&) const noexcept { return true; }
@@ -75,6 +79,13 @@ struct FlightMemory {
     std::array<Vec3d, capacity> from{};  ///< segment starts (ring buffer)
     std::array<Vec3d, capacity> to{};    ///< segment ends
     int count = 0;                       ///< flights pushed so far (the newest at (count - 1) % capacity)
+    /// A ball known to lie inside the constraining region (`safe_radius` < 0: none yet), from the
+    /// region's last distance query: a point x with |x - safe_centre| + r <= safe_radius has no
+    /// boundary within r without a new query (the distance is 1-Lipschitz). It belongs to one
+    /// region: call forget_region() before using the memory with another. Mutable: a cache of
+    /// const queries.
+    mutable Vec3d safe_centre{0.0};
+    mutable double safe_radius = -1.0;  ///< see safe_centre
 
     /// Remember the flight from a to b.
     void push(const Vec3d& a, const Vec3d& b) noexcept {
@@ -85,6 +96,22 @@ struct FlightMemory {
     }
     /// Forget every flight.
     void clear() noexcept { count = 0; }
+    /// Forget the region's safe ball (see safe_centre).
+    void forget_region() const noexcept { safe_radius = -1.0; }
+    /// A lower bound of the distance from the medium point x (inside `region`) to the region's
+    /// boundary that is >= `need` whenever the safe ball proves it; otherwise the region's
+    /// distance at x, which becomes the new safe ball.
+    template <class Region>
+    [[nodiscard]] double boundary_distance(const Vec3d& x, double need, const Region& region) const noexcept {
+        if (safe_radius >= 0.0) {
+            const double bound = safe_radius - glm::length(x - safe_centre);
+            if (bound >= need) return bound;
+        }
+        const double d = region.dist(x);
+        safe_centre = x;
+        safe_radius = std::isfinite(d) ? std::max(d, 0.0) : -1.0;
+        return d;
+    }
     /// Whether the memory changes the medium now.
     [[nodiscard]] bool active() const noexcept { return count > 0 && remembered > 0 && flights_left > 0; }
     /// Number of flights whose tubes count.
@@ -140,7 +167,7 @@ struct FlightMemory {
     [[nodiscard]] double shadowed_fraction(const Vec3d& q, const Vec3d& s, const Vec3d& t, const Region& region = {}) const noexcept {
         const int m = size();
         bool edge = false;  // the disc may reach where no centre lies (outside the region)
-        if constexpr (Region::constrains) edge = !region.deep(q, radius);
+        if constexpr (Region::constrains) edge = !(boundary_distance(q, radius, region) >= radius);
         if (m == 0 && !edge) return 0.0;
         // Per flight a -> b (ab = b - a, L2 = |ab|^2), a disc point x = q + R (u s + v t) has
         //   (x - a).ab = c0 + u c1 + v c2   and   |x - a|^2 = e0 + u e1 + v e2 + R^2 (u^2 + v^2),
@@ -166,8 +193,14 @@ struct FlightMemory {
         }
         if constexpr (Region::constrains) {
             if (edge) {
+                std::array<Vec3d, kPoints> xs;
+                for (std::size_t i = 0; i < kPoints; ++i) xs[i] = q + radius * (kDiscU[i] * s + kDiscV[i] * t);
+                std::array<bool, kPoints> ins{};
+                bool classified = false;
+                if constexpr (requires { region.classify(q, radius, xs.data(), int(kPoints), ins.data()); })
+                    classified = region.classify(q, radius, xs.data(), int(kPoints), ins.data());
                 for (std::size_t i = 0; i < kPoints; ++i)
-                    if (!in[i]) in[i] = !region.inside(q + radius * (kDiscU[i] * s + kDiscV[i] * t));
+                    if (!in[i]) in[i] = classified ? !ins[i] : !region.inside(xs[i]);
                 any = true;
             }
         }
@@ -351,7 +384,7 @@ class FlightMemoryMedium {
             if (!in_tube) {
                 const double next_tube = k < n ? iv[std::size_t(k)][0] : tmax;
                 if constexpr (Region::constrains) {
-                    const double skip = region_.dist(o + u * w) - mem_->radius;
+                    const double skip = mem_->boundary_distance(o + u * w, 1.5 * mem_->radius, region_) - mem_->radius;
                     if (skip > 0.5 * mem_->radius) {
                         u = std::min(u + skip, next_tube);
                         if (u >= tmax) break;
