@@ -190,15 +190,19 @@ inline gl::PointBasedOptions<float> default_options(const BumpyScene& sc, bool f
 /// `dir` keyed by its parameters (written only with `write`: rank 0). `cpu` receives the build
 /// (or load) CPU seconds.
 inline gl::MsTable<3> cached_table(const std::filesystem::path& dir, const BumpyScene& sc, bool full, std::uint64_t seed,
-                                   double& cpu, bool& cached, bool write = true) {
+                                   double& cpu, bool& cached, bool write = true, double range = 10.0) {
     gl::MsTableOptions to;
     to.n_rho = full ? 96 : 48;
     to.n_z = full ? 192 : 96;
     to.n_theta = full ? 18 : 12;
     to.n_phi = full ? 9 : 6;
-    to.rho_max = 10;
-    to.z_min = -10;
-    to.z_max = 10;
+    // The extent in mean free paths (default 10) at the same cell size.
+    const double scale = range / 10.0;
+    to.n_rho = int(std::lround(double(to.n_rho) * scale));
+    to.n_z = int(std::lround(double(to.n_z) * scale));
+    to.rho_max = range;
+    to.z_min = -range;
+    to.z_max = range;
     to.photons = full ? 2000000 : 200000;
     to.seed = seed;
     char gbuf[32];
@@ -206,7 +210,8 @@ inline gl::MsTable<3> cached_table(const std::filesystem::path& dir, const Bumpy
     const auto path = dir / ("wang18_ms_table_g" + std::string(gbuf) + "_bmps_" + std::to_string(to.n_rho) + "x" +
                              std::to_string(to.n_z) + "x" + std::to_string(to.n_theta) + "x" + std::to_string(to.n_phi) +
                              "_" + std::to_string(to.photons) + "_s" + std::to_string(seed) + "_v" +
-                             std::to_string(gl::ms_table_estimator_version) + ".bin");
+                             std::to_string(gl::ms_table_estimator_version) +
+                             (range == 10.0 ? std::string() : "_r" + std::to_string(range)) + ".bin");
     const double c0 = cpu_seconds();
     gl::MsTable<3> table;
     cached = false;

@@ -15,6 +15,7 @@
 #include "grainlight/integrators/ms_table_quadtree.hpp"
 #include "grainlight/integrators/ms_table_symmetric.hpp"
 #include "grainlight/integrators/point_based.hpp"
+#include "grainlight/integrators/point_based_surroundings.hpp"
 #include "grainlight/integrators/render.hpp"
 #include "grainlight/integrators/shell_tracer.hpp"
 #include "grainlight/integrators/slab.hpp"
