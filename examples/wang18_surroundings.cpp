@@ -1,7 +1,8 @@
 // wang18_surroundings: Wang & Holzschuch 2018 (TVCG), Sec. 3.5.1 ("camera rays ... after
 // diffuse or glossy bounces in the scene") and the scenes of Figs. 15-17, where the translucent
 // object stands in a room: the bumpy sphere of wang18_fig12_components (radius 20 green mean free
-// paths, BmpS., g 0.7, eta 1.33) on a diffuse floor before a diffuse wall, under the quad light.
+// paths, BmpS., g 0.7, eta 1.33) on a glossy floor (GGX; `--floor diffuse`: Lambertian) before a
+// diffuse wall, under the quad light.
 // The point-based medium is one opaque shape of the surrounding scene
 // (integrators/point_based_surroundings.hpp): the surroundings' VPT (NEE with MIS) adds, where a
 // path reaches the object, the point-based radiance (Eqs. 5-9) along the arriving ray.
@@ -19,6 +20,7 @@
 //
 //   wang18_surroundings [--quality quick|full] [--out DIR] [--seed S] [--threads N]
 //                       [--width N] [--rays N] [--vpt-spp N] [--surface-samples N] [--eps1 E]
+//                       [--table-range R] [--floor glossy|diffuse]
 //
 // Outputs: wang18_surroundings_{pb,vpt}.{exr,png} (all light), *_object.{exr,png}, the CSV, and
 // the JSON summary (last stdout line): rel_diff_object_direct, rel_diff_object_via_surroundings
@@ -44,8 +46,14 @@ constexpr float kFloorY = -1.12f;  // below the bumps (at most 6 % of the unit r
 struct Room {
     gl::QuadShape<float> floor{gl::Vec3f(-7.0f, kFloorY, -7.0f), gl::Vec3f(0, 0, 14), gl::Vec3f(14, 0, 0)};  // normal +y
     gl::QuadShape<float> wall{gl::Vec3f(-7.0f, kFloorY, -2.6f), gl::Vec3f(14, 0, 0), gl::Vec3f(0, 8, 0)};    // normal +z
-    gl::RGB floor_rho{0.60f, 0.58f, 0.55f};
+    gl::RGB floor_rho{0.60f, 0.58f, 0.55f};  ///< diffuse albedo, or F0 of the glossy floor
+    float floor_alpha = 0.15f;               ///< GGX width of the glossy floor
+    bool glossy_floor = true;
     gl::RGB wall_rho{0.45f, 0.50f, 0.60f};
+    template <class S>
+    [[nodiscard]] gl::Material<float, S> floor_material(const S& rho) const {
+        return glossy_floor ? gl::Material<float, S>::glossy(rho, floor_alpha) : gl::Material<float, S>::diffuse(rho);
+    }
 };
 
 // VPT reference callbacks (pure path tracing): emission hits after >= 1 scattering in the medium
@@ -64,7 +72,7 @@ struct RoomVpt {
         return true;
     }
     bool on_surface(gl::PathState<float, wang18::Grey>& st, const gl::SurfaceHit<float, wang18::Grey>& hit) noexcept {
-        if (count > 0 && hit.type == gl::SurfaceType::diffuse) room_after_scatter = true;
+        if (count > 0 && (hit.type == gl::SurfaceType::diffuse || hit.type == gl::SurfaceType::glossy)) room_after_scatter = true;
         if (hit.light < 0) return true;
         const float c = (st.throughput * scene.emitted(hit, st.ray.d))[0];
         all += c;
@@ -87,6 +95,7 @@ int main(int argc, char** argv) {
             const double eps1 = ex.opt<double>("eps1", 1.0, 0.5, "Alg. 1 solid-angle threshold eps1 (sr); eps2 = eps1 / 5");
             const double range = ex.opt<double>("table-range", 10.0,
                                                 "extent of the MS table in mean free paths (+- range; same cell size)");
+            const std::string floor_kind = ex.opt<std::string>("floor", "glossy", "glossy (GGX, F0 0.6, alpha 0.15) | diffuse (albedo 0.6)");
             ex.checkpointable();
             ex.ready();
             wang18::check_render_args(rays, W, 20.0);
@@ -104,7 +113,10 @@ int main(int argc, char** argv) {
             sc.H = H;
             sc.camera = gl::PinholeCamera<float>(gl::Vec3f(0.0f, 1.1f, 5.6f), gl::Vec3f(0.0f, -0.35f, 0.0f),
                                                  gl::Vec3f(0, 1, 0), 40.0f, W, H);
-            const Room room;
+            if (floor_kind != "glossy" && floor_kind != "diffuse")
+                throw gl_examples::cli_error("--floor = " + floor_kind + " must be glossy or diffuse");
+            Room room;
+            room.glossy_floor = floor_kind == "glossy";
 
             // The point-based object: light samples on the mesh, the MS table (cached), the renderer.
             double cpu_table = 0;
@@ -125,7 +137,7 @@ int main(int argc, char** argv) {
             // The surroundings: floor, wall, the light, and the object as an opaque shape.
             gl::Scene<wang18::Medium> room_scene;
             const gl::MeshShape<float> mshape(sc.mesh);
-            room_scene.add_shape(room.floor, gl::Material<float, gl::RGB>::diffuse(room.floor_rho));
+            room_scene.add_shape(room.floor, room.floor_material(room.floor_rho));
             room_scene.add_shape(room.wall, gl::Material<float, gl::RGB>::diffuse(room.wall_rho));
             const int object = room_scene.add_shape(mshape, gl::Material<float, gl::RGB>::absorber());
             room_scene.add_quad_light(sc.quad, gl::RGB(sc.Le));
@@ -161,7 +173,7 @@ int main(int argc, char** argv) {
                 wang18::SceneG s;
                 const int m = s.add_medium(wang18::MediumG(wang18::Grey(sc.sigma_t[ch]), wang18::Grey(sc.albedo[ch]),
                                                            wang18::PhaseG(sc.g)));
-                s.add_shape(room.floor, gl::Material<float, wang18::Grey>::diffuse(wang18::Grey(room.floor_rho[ch])));
+                s.add_shape(room.floor, room.floor_material(wang18::Grey(room.floor_rho[ch])));
                 s.add_shape(room.wall, gl::Material<float, wang18::Grey>::diffuse(wang18::Grey(room.wall_rho[ch])));
                 vpt_object[std::size_t(ch)] = s.add_shape(mshape, gl::Material<float, wang18::Grey>::dielectric(sc.eta), m, -1);
                 s.add_quad_light(sc.quad, wang18::Grey(sc.Le));
@@ -254,9 +266,9 @@ int main(int argc, char** argv) {
             wang18::save_image(ex, "wang18_surroundings_vpt_object", vobj, exposure + 2.0);
 
             std::printf("Wang18 Sec. 3.5.1: bumpy sphere (%zu triangles, radius 20 green mean free paths, BmpS., g 0.7, eta 1.33) "
-                        "on a diffuse floor before a diffuse wall, under the quad light; %d x %d pixels, %d point-based rays per "
+                        "on a %s floor before a diffuse wall, under the quad light; %d x %d pixels, %d point-based rays per "
                         "pixel, VPT %d spp x 3 channels (8 batches)\n",
-                        sc.shape.triangle_count(), W, H, rays, vpt_spp);
+                        sc.shape.triangle_count(), room.glossy_floor ? "glossy (GGX alpha 0.15)" : "diffuse", W, H, rays, vpt_spp);
             std::printf("  %-30s %12s %12s %10s %18s\n", "light (image mean)", "point-based", "VPT", "VPT s.e.", "rel.diff");
             const char* names[kFilms] = {"all (room + object)", "object, seen directly", "object, through the room",
                                          "object lit by the room (VPT)"};
@@ -282,6 +294,7 @@ int main(int argc, char** argv) {
 
             gl_examples::Json j = ex.summary();
             j.integer("width", W).integer("height", H).integer("rays", rays).integer("vpt_spp", vpt_spp).num("table_range", range);
+            j.str("floor", floor_kind);
             wang18::put_rank_rows(ex, j, H);
             j.num("pb_object_direct", pbm[kObjDirect])
                 .num("vpt_object_direct", ref[kObjDirect])

@@ -162,6 +162,18 @@ SceneT lit_scene() {
     s.add_light(SceneT::LightT::environment_light(RGB(0.1f)));
     return s;
 }
+// The lit scene with a glossy ground and a near-mirror glossy ball.
+SceneT lit_scene_glossy() {
+    SceneT s;
+    const int m = s.add_medium(MediumT(RGB{2.0f, 3.0f, 4.0f}, RGB(0.85f), Phase(0.3f)));
+    s.add_shape(QuadShape<float>(Vec3f(-4, 0, -4), Vec3f(0, 0, 8), Vec3f(8, 0, 0)),
+                Material<float, RGB>::glossy(RGB{0.7f, 0.6f, 0.4f}, 0.3f));
+    s.add_shape(SphereShape<float>(Vec3f(-0.8f, 0.7f, 0.0f), 0.7f), Material<float, RGB>::index_matched(), m, -1);
+    s.add_shape(SphereShape<float>(Vec3f(0.9f, 0.6f, 0.2f), 0.6f), Material<float, RGB>::glossy(RGB(0.9f), 0.05f));
+    s.add_quad_light(QuadShape<float>(Vec3f(-1, 3, -1), Vec3f(2, 0, 0), Vec3f(0, 0, 2)), RGB(6.0f));
+    s.add_light(SceneT::LightT::environment_light(RGB(0.1f)));
+    return s;
+}
 PinholeCamera<float> lit_camera(int w, int h) {
     return PinholeCamera<float>(Vec3f(0, 1.5f, 5), Vec3f(0, 0.6f, 0), Vec3f(0, 1, 0), 40.0f, w, h);
 }
@@ -189,6 +201,31 @@ TEST_CASE("NEE + MIS and pure path tracing estimate the same image", "[vpt][nee]
         CHECK(std::abs(st.mean) <= 4 * st.se + 1e-3 * level);
         CHECK(level > 0.05);
     }
+}
+
+TEST_CASE("Glossy surfaces: NEE + MIS and pure path tracing estimate the same image", "[vpt][nee][mis][glossy]") {
+    const SceneT scene = lit_scene_glossy();
+    const auto cam = lit_camera(32, 24);
+    RenderOptions a;
+    a.spp = 64;
+    a.seed = 5;
+    RenderOptions b = a;
+    b.seed = 6;
+    b.vpt.nee = false;
+    b.spp = 512;
+    const Image ia = render_vpt(scene, cam, a).image();
+    const Image ib = render_vpt(scene, cam, b).image();
+    for (int c = 0; c < 3; ++c) {
+        Image d(ia.width, ia.height);
+        for (std::size_t i = 0; i < d.rgb.size(); ++i) d.rgb[i] = ia.rgb[i] - ib.rgb[i];
+        const MeanSe st = pixel_stats(d, c);
+        const double level = pixel_stats(ia, c).mean;
+        INFO("channel " << c << ": mean(NEE - PT) = " << st.mean << " +- " << st.se << ", image mean " << level);
+        CHECK(std::abs(st.mean) <= 4 * st.se + 1e-3 * level);
+        CHECK(level > 0.05);
+    }
+    REQUIRE_THROWS_WITH((Material<float, RGB>::glossy(RGB(0.5f), 0.0f)), Catch::Contains("alpha"));
+    REQUIRE_THROWS_WITH((Material<float, RGB>::glossy(RGB{0.5f, 1.5f, 0.5f}, 0.2f)), Catch::Contains("F0"));
 }
 
 TEST_CASE("Render is identical for 1 and 2 threads", "[vpt][determinism]") {

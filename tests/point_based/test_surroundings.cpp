@@ -54,6 +54,47 @@ TEST_CASE("point_based_in_scene: a floor lit by a uniformly bright object matche
     CHECK(w.standard_error() < 0.01 * expected);  // the check resolves 4 % of the value
 }
 
+TEST_CASE("point_based_in_scene: a glossy floor reflects the object as the BRDF quadrature says",
+          "[point_based][surroundings][glossy]") {
+    // The object light at x0 through a glossy floor: L0 times the integral of f cos over the
+    // directions that reach the sphere (a quadrature of eval_glossy over the hemisphere).
+    const float alpha = 0.3f;
+    const Grey F0(0.8f);
+    SceneT scene;
+    scene.add_shape(floor_quad(), Material<float, Grey>::glossy(F0, alpha));
+    const int obj = scene.add_shape(sphere(), Material<float, Grey>::absorber());
+    const UniformObject L{1.0f};
+    const Ray<float> ray = floor_ray();
+    const Vec3d x0(1.5, -2.0, 0.0), wo = -Vec3d(ray.d);  // local frame = world (normal +y -> z)
+    double expected = 0;
+    const int nt = 600, np = 1200;
+    for (int i = 0; i < nt; ++i) {
+        const double th = (i + 0.5) * 0.5 * pi_v<double> / nt;
+        for (int j = 0; j < np; ++j) {
+            const double ph = (j + 0.5) * 2 * pi_v<double> / np;
+            const Vec3d w(std::sin(th) * std::cos(ph), std::cos(th), std::sin(th) * std::sin(ph));  // y up
+            // Does the ray x0 + t w meet the unit sphere at the origin?
+            const double b = glm::dot(x0, w), c = glm::dot(x0, x0) - 1.0;
+            if (b * b - c <= 0 || -b - std::sqrt(b * b - c) <= 0) continue;
+            // Local frame with the normal (+y) as z: f depends only on the angles, so swapping y
+            // and z (a reflection) leaves it unchanged.
+            float pdf = 0;
+            const Vec3f wol(float(wo.x), float(wo.z), float(wo.y)), wl(float(w.x), float(w.z), float(w.y));
+            expected += double(eval_glossy(wol, wl, F0, alpha, pdf)[0]) * std::sin(th);
+        }
+    }
+    expected *= (0.5 * pi_v<double> / nt) * (2 * pi_v<double> / np);
+    const int n = 200000;
+    Welford w;
+    for (int i = 0; i < n; ++i) {
+        Rng rng = Rng::from_key(507, std::uint64_t(i));
+        w.add(double(point_based_in_scene(scene, obj, L, ray, rng).object[0]));
+    }
+    INFO("object light through the glossy floor: " << w.mean() << " +- " << w.standard_error() << ", quadrature " << expected);
+    CHECK(std::abs(w.mean() - expected) < 4.0 * w.standard_error() + 2e-3 * expected);
+    CHECK(expected > 0.01);
+}
+
 TEST_CASE("point_based_in_scene: the surroundings part is the VPT with the object black, bit for bit",
           "[point_based][surroundings]") {
     SceneT scene;

@@ -511,6 +511,18 @@ template <LitScene Scene, BoundaryShape Shape, class Policy = NeverSwitch>
             ps.specular = false;
             ps.last_pdf = cosine_hemisphere_pdf(local.z);
             ps.last_p = x;
+        } else if (sh.type == SurfaceType::glossy) {
+            // Sampled only (no NEE here): marked specular so the emission it finds counts in full.
+            const Vec3d nf = from_outside ? n : -n;
+            const Frame<double> fr(nf);
+            const auto gs = sample_glossy(fr.to_local(-d), sh.reflectance, double(sh.roughness), rng.uniform2<double>());
+            if (!gs.valid) return EptStep::finished;
+            d = glm::normalize(fr.to_world(gs.wi));
+            beta *= gs.weight;
+            p = x + 1e-5 * (1.0 + max_abs_component(x)) * nf;
+            ps.specular = true;
+            ps.last_pdf = 0;
+            ps.last_p = x;
         } else {  // smooth dielectric scene surface
             bool refracted = false;
             double eta_rel = 1;

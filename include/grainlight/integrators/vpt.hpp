@@ -1,7 +1,7 @@
 /// @file grainlight/integrators/vpt.hpp
 /// Volumetric path tracer built on the walk kernel (integrators/walk.hpp): camera paths in
 /// radiance mode, refraction and Fresnel reflection at smooth dielectric boundaries (kernel),
-/// next-event estimation wherever a shadow connection exists (diffuse surfaces, scattering events
+/// next-event estimation wherever a shadow connection exists (diffuse and glossy surfaces, scattering events
 /// in media, through index-matched boundaries and the media behind them), multiple importance
 /// sampling (power heuristic, Veach 1997 ch. 9) between light sampling and BSDF/phase sampling
 /// for area and environment lights, Russian roulette (kernel).
@@ -19,11 +19,13 @@
 #include <cmath>
 #include <limits>
 
+#include "grainlight/core/frame.hpp"
 #include "grainlight/core/ray.hpp"
 #include "grainlight/core/rng.hpp"
 #include "grainlight/core/warp.hpp"
 #include "grainlight/integrators/walk.hpp"
 #include "grainlight/media/concepts.hpp"
+#include "grainlight/optics/microfacet.hpp"
 #include "grainlight/scene/concepts.hpp"
 
 namespace grainlight {
@@ -127,7 +129,16 @@ struct VptCallbacks {
     /// a light sample; returns true (the walk continues).
     bool on_surface(PathState<F, S>& st, const SurfaceHit<F, S>& hit) noexcept {
         if (hit.light >= 0) add_emission(st, scene.emitted(hit, st.ray.d), hit);
-        if (hit.type == SurfaceType::diffuse) last_nee = opt.nee;
+        if (hit.type == SurfaceType::diffuse || hit.type == SurfaceType::glossy) last_nee = opt.nee;
+        if (opt.nee && hit.type == SurfaceType::glossy) {
+            const Vec3<F> nf = glm::dot(st.ray.d, hit.n) < F(0) ? hit.n : -hit.n;
+            const Frame<F> fr(nf);
+            const Vec3<F> wo = fr.to_local(-st.ray.d);
+            next_event(st, hit.p, offset_ray_origin(hit.p, nf, nf), [&](const Vec3<F>& w, S& f, F& pdf) {
+                f = eval_glossy(wo, fr.to_local(w), hit.reflectance, hit.roughness, pdf);
+                return pdf > F(0);
+            });
+        }
         if (opt.nee && hit.type == SurfaceType::diffuse) {
             const Vec3<F> nf = glm::dot(st.ray.d, hit.n) < F(0) ? hit.n : -hit.n;
             const S rho_over_pi = hit.reflectance * inv_pi_v<F>;

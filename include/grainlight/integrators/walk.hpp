@@ -49,6 +49,7 @@
 #include "grainlight/core/warp.hpp"
 #include "grainlight/media/concepts.hpp"
 #include "grainlight/optics/fresnel.hpp"
+#include "grainlight/optics/microfacet.hpp"
 #include "grainlight/scene/concepts.hpp"
 
 namespace grainlight {
@@ -246,6 +247,28 @@ inline WalkEnd walk(const Scene& scene, PathState<typename Scene::Float, typenam
                 st.ray = Ray<F>(offset_ray_origin(hit.p, nf, w_new), w_new, inf, cone);
                 st.specular = false;
                 st.last_pdf = cosine_hemisphere_pdf(local.z);
+                st.last_p = hit.p;
+                if (st.throughput.is_black()) {
+                    if constexpr (requires { cb.on_absorb(st); }) cb.on_absorb(st);
+                    return WalkEnd::absorbed;
+                }
+                break;
+            }
+            case SurfaceType::glossy: {
+                if (++st.depth > opt.max_depth) return WalkEnd::max_depth;
+                const Vec3<F> nf = from_outside ? hit.n : -hit.n;  // facing the arriving path
+                const Frame<F> fr(nf);
+                const GlossySample<F, S> gs =
+                    sample_glossy(fr.to_local(-d), hit.reflectance, hit.roughness, rng.template uniform2<F>());
+                if (!gs.valid) {
+                    if constexpr (requires { cb.on_absorb(st); }) cb.on_absorb(st);
+                    return WalkEnd::absorbed;
+                }
+                const Vec3<F> w_new = glm::normalize(fr.to_world(gs.wi));
+                st.throughput *= gs.weight;
+                st.ray = Ray<F>(offset_ray_origin(hit.p, nf, w_new), w_new, inf, cone);
+                st.specular = false;
+                st.last_pdf = gs.pdf;
                 st.last_p = hit.p;
                 if (st.throughput.is_black()) {
                     if constexpr (requires { cb.on_absorb(st); }) cb.on_absorb(st);

@@ -28,7 +28,8 @@ enum class SurfaceType : std::uint8_t {
     passthrough,  ///< index-matched medium boundary (no reflection): the path continues straight on
     dielectric,   ///< smooth dielectric interface: Fresnel reflection or Snell refraction (eta)
     diffuse,      ///< Lambertian reflector with albedo `reflectance` (opaque)
-    absorber      ///< black, opaque (an emitter with no reflectance, a light shield)
+    absorber,     ///< black, opaque (an emitter with no reflectance, a light shield)
+    glossy        ///< opaque GGX microfacet reflector (optics/microfacet.hpp): F0 = `reflectance`, width `roughness`
 };
 
 /// A ray-surface intersection. `t` = +inf means no hit (then the other fields are unspecified).
@@ -40,7 +41,8 @@ struct SurfaceHit {
     /// How the walk kernel treats the surface (absorber for a miss).
     SurfaceType type = SurfaceType::absorber;
     F eta = F(1);                 ///< n_inside / n_outside (dielectric)
-    S reflectance{F(0)};          ///< diffuse albedo per channel (diffuse)
+    S reflectance{F(0)};          ///< diffuse albedo per channel (diffuse); normal-incidence Fresnel F0 (glossy)
+    F roughness = F(0);           ///< GGX width alpha (glossy)
     int medium_inside = -1;       ///< medium behind n (-1 = none)
     int medium_outside = -1;      ///< medium in front of n (-1 = none)
     int shape = -1;               ///< shape index (scene-defined)

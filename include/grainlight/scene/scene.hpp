@@ -24,6 +24,7 @@
 #include "grainlight/core/vector.hpp"
 #include "grainlight/core/warp.hpp"
 #include "grainlight/media/concepts.hpp"
+#include "grainlight/optics/microfacet.hpp"
 #include "grainlight/scene/concepts.hpp"
 #include "grainlight/scene/lights.hpp"
 #include "grainlight/scene/shapes.hpp"
@@ -35,8 +36,9 @@ template <std::floating_point F, class S>
 struct Material {
     /// What the walk kernel does at a hit.
     SurfaceType type = SurfaceType::diffuse;
-    S reflectance = S(F(0.5));  ///< diffuse albedo (diffuse)
+    S reflectance = S(F(0.5));  ///< diffuse albedo (diffuse); normal-incidence reflectance F0 (glossy)
     F eta = F(1);           ///< n_inside / n_outside (dielectric)
+    F roughness = F(0);     ///< GGX width alpha (glossy)
 
     /// Lambertian reflector, albedo in [0, 1] per channel.
     [[nodiscard]] static Material diffuse(const S& rho) {
@@ -54,6 +56,14 @@ struct Material {
     [[nodiscard]] static Material index_matched() { return {SurfaceType::passthrough, S(F(0)), F(1)}; }
     /// Black, opaque.
     [[nodiscard]] static Material absorber() { return {SurfaceType::absorber, S(F(0)), F(1)}; }
+    /// Opaque glossy reflector: GGX microfacets of width `alpha` in [1e-3, 1] with Schlick's
+    /// Fresnel on the normal-incidence reflectance `F0` in [0, 1] per channel (optics/microfacet.hpp).
+    [[nodiscard]] static Material glossy(const S& F0, F alpha) {
+        for (std::size_t c = 0; c < S::size; ++c)
+            check_argument(F0[c] >= F(0) && F0[c] <= F(1), "Material::glossy", "F0", F0[c], "[0, 1]");
+        check_argument(alpha >= F(glossy_min_alpha) && alpha <= F(1), "Material::glossy", "alpha", alpha, "[0.001, 1]");
+        return {SurfaceType::glossy, F0, F(1), alpha};
+    }
 };
 
 /// The scene. `MediumT` is the one medium type of the scene (a closed set of several kinds can
@@ -161,6 +171,7 @@ public:
         h.type = e.material.type;
         h.eta = e.material.eta;
         h.reflectance = e.material.reflectance;
+        h.roughness = e.material.roughness;
         h.medium_inside = e.medium_inside;
         h.medium_outside = e.medium_outside;
         h.shape = best;
