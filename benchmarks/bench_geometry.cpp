@@ -5,6 +5,8 @@
 //   bench_geometry --benchmark_filter=GrainQuery
 #include <benchmark/benchmark.h>
 
+#include <array>
+#include <cmath>
 #include <map>
 #include <memory>
 #include <vector>
@@ -142,3 +144,62 @@ static void BM_RaySphere(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_RaySphere);
+
+// Which of 32 points within r of a point near a mesh surface are inside (the flight memory's
+// collision disc, media/flight_memory.hpp): MeshDistance::inside_near (one range search, segment
+// parity against the near triangles) against the baseline of a parity test per point
+// (MeshDistance::inside: three full rays each). Mesh: an icosphere of radius 40 (arg: level),
+// r = 1, points within 1 of the surface. Items = 32-point discs.
+namespace {
+struct DiscSet {
+    std::vector<Vec3d> q;
+    std::vector<std::array<Vec3d, 32>> x;
+};
+DiscSet make_discs(std::size_t n) {
+    DiscSet s;
+    Pcg32 rng = Pcg32::from_key(4);
+    for (std::size_t i = 0; i < n; ++i) {
+        const Vec3d q = (40.0 - rng.uniform<double>()) * sample_uniform_sphere(rng.uniform2<double>());
+        std::array<Vec3d, 32> x;
+        for (auto& xi : x) xi = q + sample_uniform_sphere(rng.uniform2<double>()) * std::sqrt(rng.uniform<double>());
+        s.q.push_back(q);
+        s.x.push_back(x);
+    }
+    return s;
+}
+MeshDistance big_sphere(int level) {
+    TriangleMesh<double> m = make_icosphere<double>(level);
+    for (auto& v : m.vertices) v *= 40.0;
+    m.compute_face_normals();
+    return MeshDistance(m);
+}
+}  // namespace
+
+static void BM_DiscInsideNear(benchmark::State& state) {
+    const MeshDistance md = big_sphere(int(state.range(0)));
+    const DiscSet d = make_discs(1024);
+    std::size_t i = 0;
+    std::array<bool, 32> out{};
+    for (auto _ : state) {
+        if (!md.inside_near(d.q[i], 1.0, true, d.x[i].data(), 32, out.data()))
+            for (std::size_t k = 0; k < 32; ++k) out[k] = md.inside(d.x[i][k]);
+        benchmark::DoNotOptimize(out.data());
+        i = (i + 1) & 1023;
+    }
+    state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_DiscInsideNear)->Arg(4)->Arg(6);
+
+static void BM_DiscInsidePerPoint(benchmark::State& state) {  // baseline
+    const MeshDistance md = big_sphere(int(state.range(0)));
+    const DiscSet d = make_discs(1024);
+    std::size_t i = 0;
+    std::array<bool, 32> out{};
+    for (auto _ : state) {
+        for (std::size_t k = 0; k < 32; ++k) out[k] = md.inside(d.x[i][k]);
+        benchmark::DoNotOptimize(out.data());
+        i = (i + 1) & 1023;
+    }
+    state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_DiscInsidePerPoint)->Arg(4)->Arg(6);
