@@ -20,7 +20,7 @@
 //
 //   wang18_surroundings [--quality quick|full] [--out DIR] [--seed S] [--threads N]
 //                       [--width N] [--rays N] [--vpt-spp N] [--surface-samples N] [--eps1 E]
-//                       [--table-range R] [--floor glossy|diffuse]
+//                       [--table-range R] [--floor glossy|diffuse] [--room-spp N]
 //
 // Outputs: wang18_surroundings_{pb,vpt}.{exr,png} (all light), *_object.{exr,png}, the CSV, and
 // the JSON summary (last stdout line): rel_diff_object_direct, rel_diff_object_via_surroundings
@@ -42,6 +42,11 @@ namespace {
 enum Film : int { kAll = 0, kObjDirect = 1, kObjVia = 2, kObjLitByRoom = 3, kFilms = 4 };
 
 constexpr float kFloorY = -1.12f;  // below the bumps (at most 6 % of the unit radius)
+
+// The object as black (paths that only estimate the room's light).
+struct DarkObject {
+    [[nodiscard]] gl::RGB radiance(const gl::Ray<float>&, gl::Rng&) const noexcept { return gl::RGB(0.0f); }
+};
 
 struct Room {
     gl::QuadShape<float> floor{gl::Vec3f(-7.0f, kFloorY, -7.0f), gl::Vec3f(0, 0, 14), gl::Vec3f(14, 0, 0)};  // normal +y
@@ -90,6 +95,9 @@ int main(int argc, char** argv) {
         "out/wang18_surroundings", [&](gl_examples::Example& ex) -> int {
             const int W = ex.opt<int>("width", 40, 512, "image width in pixels (height 3/4 of it)");
             const int rays = ex.opt<int>("rays", 4, 4, "camera rays per pixel of the point-based render");
+            const int room_spp = ex.opt<int>("room-spp", 16, 64,
+                                             "paths per pixel for the room's own light (>= --rays; the object's light "
+                                             "comes from the first --rays of them)");
             const int vpt_spp = ex.opt<int>("vpt-spp", 1024, 256, "VPT samples per pixel and channel (multiple of 8)");
             const int n_surface = ex.opt<int>("surface-samples", 12000, 40000, "Poisson-disk light surface samples on the mesh");
             const double eps1 = ex.opt<double>("eps1", 1.0, 0.5, "Alg. 1 solid-angle threshold eps1 (sr); eps2 = eps1 / 5");
@@ -100,6 +108,8 @@ int main(int argc, char** argv) {
             ex.ready();
             wang18::check_render_args(rays, W, 20.0);
             wang18::check_vpt_spp(vpt_spp);
+            if (room_spp < rays || room_spp > 65536)
+                throw gl_examples::cli_error("--room-spp = " + ex.given_text("room-spp") + " must be in [--rays, 65536]");
             wang18::check_surface_samples(n_surface);
             if (!(eps1 > 0 && eps1 <= 10))
                 throw gl_examples::cli_error("--eps1 = " + ex.given_text("eps1") + " must be in (0, 10]");
@@ -148,20 +158,27 @@ int main(int argc, char** argv) {
                     for (int x = 0; x < W; ++x) {
                         gl::RGB acc[kFilms];
                         for (auto& a : acc) a = gl::RGB(0.0f);
-                        for (int k = 0; k < rays; ++k) {
+                        // The object's light from `rays` paths; the room's from `room_spp` (>= rays: the
+                        // first `rays` paths serve both; the others end at the object without asking it).
+                        gl::RGB room_light(0.0f);
+                        for (int k = 0; k < room_spp; ++k) {
                             gl::Rng rng = gl::Rng::from_key(seed, std::uint64_t(y) * std::uint64_t(W) + std::uint64_t(x),
                                                             0x10000u + std::uint64_t(k));
                             const gl::Vec2f u = rng.uniform2<float>();
                             const gl::Ray<float> ray = sc.camera.generate_ray(float(x) + u.x, float(y) + u.y);
+                            if (k >= rays) {
+                                room_light += gl::point_based_in_scene(room_scene, object, DarkObject{}, ray, rng).surroundings;
+                                continue;
+                            }
                             const bool direct = room_scene.intersect(ray).shape == object;
                             const auto r = gl::point_based_in_scene(room_scene, object, pb, ray, rng);
-                            acc[kAll] += r.total();
+                            room_light += r.surroundings;
                             acc[direct ? kObjDirect : kObjVia] += r.object;
                         }
-                        for (int f = 0; f < kFilms; ++f) {
-                            const gl::RGB v = acc[f] * (1.0f / float(rays));
-                            film[std::size_t(f)].add_rgb(x, y, v[0], v[1], v[2]);
-                        }
+                        acc[kObjDirect] *= 1.0f / float(rays);
+                        acc[kObjVia] *= 1.0f / float(rays);
+                        acc[kAll] = room_light * (1.0f / float(room_spp)) + acc[kObjDirect] + acc[kObjVia];
+                        for (int f = 0; f < kFilms; ++f) film[std::size_t(f)].add_rgb(x, y, acc[f][0], acc[f][1], acc[f][2]);
                     }
                 });
             const double cpu_pb = wang18::sum_over_ranks(ex, wang18::cpu_seconds() - c0);
@@ -267,8 +284,9 @@ int main(int argc, char** argv) {
 
             std::printf("Wang18 Sec. 3.5.1: bumpy sphere (%zu triangles, radius 20 green mean free paths, BmpS., g 0.7, eta 1.33) "
                         "on a %s floor before a diffuse wall, under the quad light; %d x %d pixels, %d point-based rays per "
-                        "pixel, VPT %d spp x 3 channels (8 batches)\n",
-                        sc.shape.triangle_count(), room.glossy_floor ? "glossy (GGX alpha 0.15)" : "diffuse", W, H, rays, vpt_spp);
+                        "pixel (%d paths for the room's own light), VPT %d spp x 3 channels (8 batches)\n",
+                        sc.shape.triangle_count(), room.glossy_floor ? "glossy (GGX alpha 0.15)" : "diffuse", W, H, rays, room_spp,
+                        vpt_spp);
             std::printf("  %-30s %12s %12s %10s %18s\n", "light (image mean)", "point-based", "VPT", "VPT s.e.", "rel.diff");
             const char* names[kFilms] = {"all (room + object)", "object, seen directly", "object, through the room",
                                          "object lit by the room (VPT)"};
@@ -293,7 +311,7 @@ int main(int argc, char** argv) {
                         "rest of the scene; no per-component numbers are given]\n");
 
             gl_examples::Json j = ex.summary();
-            j.integer("width", W).integer("height", H).integer("rays", rays).integer("vpt_spp", vpt_spp).num("table_range", range);
+            j.integer("width", W).integer("height", H).integer("rays", rays).integer("room_spp", room_spp).integer("vpt_spp", vpt_spp).num("table_range", range);
             j.str("floor", floor_kind);
             wang18::put_rank_rows(ex, j, H);
             j.num("pb_object_direct", pbm[kObjDirect])
