@@ -223,6 +223,13 @@ KEYS = {
         ("RMSE point-based vs VPT", "pb_error_rmse", "MSE 2.9e-4 .. 1.3e-3", "Wang18 Table 3"),
         ("speedup at equal error", "speedup_equal_error", "11x-360x vs UPBP", "Wang18 Table 3"),
     ],
+    "wang18_surroundings": [
+        ("object seen directly: rel. diff. vs VPT", "rel_diff_object_direct", "", "Wang18 Sec. 3.5.1"),
+        ("object through the room: rel. diff.", "rel_diff_object_via_surroundings", "",
+         "Wang18 Sec. 3.5.1 (camera rays after bounces)"),
+        ("object light that entered after a room bounce (VPT share)", "vpt_object_lit_by_surroundings_share", "",
+         "Wang18 Sec. 3.4.2 (not gathered)"),
+    ],
     "moon07_shell_transport": [
         ("max MSD rel. difference shells vs explicit", "max_msd_rel_diff", "shells reproduce explicit paths",
          "Moon07 Sec. 5"),
