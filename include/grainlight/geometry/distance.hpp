@@ -234,38 +234,15 @@ public:
     [[nodiscard]] NearestPoint nearest(const Vec3d& p) const noexcept {
         NearestPoint best;
         double best2 = std::numeric_limits<double>::infinity();
-        const auto& nodes = data_->nodes;
-        std::uint32_t stack[128];
-        int sp = 0;
-        stack[sp++] = 0;
-        while (sp > 0) {
-            const Node& nd = nodes[stack[--sp]];
-            if (distance2_to_box(nd.box, p) >= best2) continue;
-            if (nd.count > 0) {
-                for (std::uint32_t i = nd.first; i < nd.first + nd.count; ++i) {
-                    const auto& t = data_->tris[i];
-                    const Vec3d q = closest_point_on_triangle(p, t[0], t[1], t[2]);
-                    const double d2 = glm::dot(q - p, q - p);
-                    if (d2 < best2) {
-                        best2 = d2;
-                        best.point = q;
-                        best.triangle = data_->ids[i];
-                    }
-                }
-                continue;
+        // The pruning radius shrinks to the best triangle so far.
+        (void)visit_within(p, best2, [&](std::uint32_t i, const Vec3d& q, double d2) {
+            if (d2 < best2) {
+                best2 = d2;
+                best.point = q;
+                best.triangle = data_->ids[i];
             }
-            // Push the farther child first so the nearer one is searched first.
-            const std::uint32_t a = nd.first, b = nd.first + 1;
-            const double da = distance2_to_box(nodes[a].box, p), db = distance2_to_box(nodes[b].box, p);
-            if (sp + 2 > 128) continue;  // cannot happen for balanced trees of < 2^60 triangles
-            if (da < db) {
-                stack[sp++] = b;
-                stack[sp++] = a;
-            } else {
-                stack[sp++] = a;
-                stack[sp++] = b;
-            }
-        }
+            return false;
+        });
         best.distance = std::sqrt(best2);
         return best;
     }
@@ -277,33 +254,9 @@ public:
         // Prune boxes with a slightly larger radius (never skip a triangle within r by rounding);
         // decide on triangles with the same sqrt as nearest(), so ball_inside(p, (*this)(p)) holds.
         const double r2 = r * r * (1.0 + 1e-12);
-        const auto& nodes = data_->nodes;
-        std::uint32_t stack[128];
-        int sp = 0;
-        stack[sp++] = 0;
-        while (sp > 0) {
-            const Node& nd = nodes[stack[--sp]];
-            if (distance2_to_box(nd.box, p) >= r2) continue;
-            if (nd.count > 0) {
-                for (std::uint32_t i = nd.first; i < nd.first + nd.count; ++i) {
-                    const auto& t = data_->tris[i];
-                    const Vec3d q = closest_point_on_triangle(p, t[0], t[1], t[2]);
-                    const double d2 = glm::dot(q - p, q - p);
-                    if (d2 < r2 && std::sqrt(d2) < r) return true;
-                }
-                continue;
-            }
-            if (sp + 2 > 128) return true;  // conservative (cannot happen for balanced trees)
-            const std::uint32_t a = nd.first, b = nd.first + 1;
-            if (distance2_to_box(nodes[a].box, p) < distance2_to_box(nodes[b].box, p)) {
-                stack[sp++] = b;
-                stack[sp++] = a;
-            } else {
-                stack[sp++] = a;
-                stack[sp++] = b;
-            }
-        }
-        return false;
+        // Stopped at a triangle within r, or (conservative) out of stack.
+        return visit_within(p, r2, [&](std::uint32_t, const Vec3d&, double d2) { return d2 < r2 && std::sqrt(d2) < r; }) !=
+               Visit::completed;
     }
     /// The conservative "is the closed ball B(p, r) inside the volume" query (Meng15 Sec. 5's
     /// VPT -> DA criterion "no triangle within d_DA", Moon07's largest shell that fits): true iff
@@ -344,27 +297,13 @@ public:
         std::array<std::uint32_t, near_capacity> near;
         int m = 0;
         const double r2 = r * r * (1.0 + 1e-9);  // never miss a triangle within r by rounding
-        const auto& nodes = data_->nodes;
-        std::uint32_t stack[128];
-        int sp = 0;
-        stack[sp++] = 0;
-        while (sp > 0) {
-            const Node& nd = nodes[stack[--sp]];
-            if (distance2_to_box(nd.box, p) >= r2) continue;
-            if (nd.count > 0) {
-                for (std::uint32_t i = nd.first; i < nd.first + nd.count; ++i) {
-                    const auto& t = data_->tris[i];
-                    const Vec3d q = closest_point_on_triangle(p, t[0], t[1], t[2]);
-                    if (glm::dot(q - p, q - p) >= r2) continue;
-                    if (m == near_capacity) return false;
-                    near[std::size_t(m++)] = i;
-                }
-                continue;
-            }
-            if (sp + 2 > 128) return false;  // cannot happen for balanced trees
-            stack[sp++] = nd.first;
-            stack[sp++] = nd.first + 1;
-        }
+        const Visit v = visit_within(p, r2, [&](std::uint32_t i, const Vec3d&, double d2) {
+            if (d2 >= r2) return false;
+            if (m == near_capacity) return true;  // one more than it gathers: decline
+            near[std::size_t(m++)] = i;
+            return false;
+        });
+        if (v != Visit::completed) return false;
         for (int i = 0; i < n; ++i) {
             const Vec3d d = x[i] - p;
             int crossings = 0;
@@ -396,6 +335,41 @@ public:
     [[nodiscard]] std::size_t triangle_count() const noexcept { return data_->tris.size(); }
 
 private:
+    /// How visit_within ended.
+    enum class Visit { completed, stopped, out_of_stack };
+    /// Visits the triangles (index into data_->tris, nearest point to p, its squared distance) of every leaf whose box
+    /// is closer to p than sqrt(r2), the nearer child first, until `fn` returns true. `r2` is read
+    /// at every node, so `fn` may shrink it (nearest: the best distance so far).
+    template <class Fn>
+    [[nodiscard]] Visit visit_within(const Vec3d& p, const double& r2, Fn&& fn) const noexcept {
+        const auto& nodes = data_->nodes;
+        std::uint32_t stack[128];
+        int sp = 0;
+        stack[sp++] = 0;
+        while (sp > 0) {
+            const Node& nd = nodes[stack[--sp]];
+            if (distance2_to_box(nd.box, p) >= r2) continue;
+            if (nd.count > 0) {
+                for (std::uint32_t i = nd.first; i < nd.first + nd.count; ++i) {
+                    const auto& t = data_->tris[i];
+                    const Vec3d q = closest_point_on_triangle(p, t[0], t[1], t[2]);
+                    if (fn(i, q, glm::dot(q - p, q - p))) return Visit::stopped;
+                }
+                continue;
+            }
+            if (sp + 2 > 128) return Visit::out_of_stack;  // cannot happen for balanced trees
+            const std::uint32_t a = nd.first, b = nd.first + 1;
+            if (distance2_to_box(nodes[a].box, p) < distance2_to_box(nodes[b].box, p)) {
+                stack[sp++] = b;
+                stack[sp++] = a;
+            } else {
+                stack[sp++] = a;
+                stack[sp++] = b;
+            }
+        }
+        return Visit::completed;
+    }
+
     static constexpr std::size_t leaf_size = 4;
     struct Node {
         Aabb<double> box;
