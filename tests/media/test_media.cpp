@@ -300,7 +300,6 @@ namespace {
 // Grain centres only below the plane y = 0 (a half-space aggregate's boundary).
 struct BelowPlane {
     [[nodiscard]] bool inside(const Vec3d& x) const noexcept { return x.y < 0.0; }
-    [[nodiscard]] bool deep(const Vec3d& x, double r) const noexcept { return x.y <= -r; }
     [[nodiscard]] double dist(const Vec3d& x) const noexcept { return -x.y; }
     static constexpr bool constrains = true;
 };

@@ -26,14 +26,6 @@ struct CentresInside {
     const Distance* distance = nullptr;  ///< distance to the boundary
     /// Whether a grain centre may lie at x.
     [[nodiscard]] bool inside(const Vec3d& x) const noexcept { return shape->inside(x); }
-    /// Whether the ball of radius r about the medium point x (inside) is inside the boundary:
-    /// no surface within r (MeshDistance::any_within, no parity test), else `ball_inside`.
-    [[nodiscard]] bool deep(const Vec3d& x, double r) const noexcept {
-        if constexpr (requires { { distance->any_within(x, r) } -> std::convertible_to<bool>; })
-            return !distance->any_within(x, r);
-        else
-            return ball_inside(*distance, x, r);
-    }
     /// Distance from the inside point x to the boundary (the unsigned distance where the query
     /// has one: no parity test).
     [[nodiscard]] double dist(const Vec3d& x) const noexcept {

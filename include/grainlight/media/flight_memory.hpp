@@ -50,9 +50,8 @@
 namespace grainlight {
 
 /// Where grain centres may lie, for FlightMemoryMedium: everywhere (no boundary constraint).
-/// A region type has `inside(x)` (a grain centre may lie at x), `deep(x, r)` (for a point x of
-/// the medium, which lies inside: every point within r of x is inside), `dist(x)` (a lower
-/// bound of the distance from an inside point x to the boundary: the memory asks it, through
+/// A region type has `inside(x)` (a grain centre may lie at x), `dist(x)` (a lower bound of the
+/// distance from an inside point x to the boundary: the memory asks it, through
 /// its safe ball FlightMemory::boundary_distance, where the collision disc or a shadow ray may
 /// reach the boundary) and `constrains`; optionally `classify(q, r, x, n, out)` (out[i] =
 /// inside(x[i]) for n points within r of the medium point q, all at once; false if it
@@ -60,8 +59,6 @@ namespace grainlight {
 struct AnyCentre {
     /// Always true.
     [[nodiscard]] constexpr bool inside(const Vec3d&) const noexcept { return true; }
-    /// Always true.
-    [[nodiscard]] constexpr bool deep(const Vec3d&, double) const noexcept { return true; }
     /// Distance from x to the region's boundary (inside: >= 0): infinite.
     [[nodiscard]] double dist(const Vec3d&) const noexcept { return std::numeric_limits<double>::infinity(); }
     /// Whether the region constrains anything (false: the medium skips the tests).
