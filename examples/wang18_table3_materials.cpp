@@ -108,6 +108,7 @@ struct Settings {
     bool ms_image = false;   ///< boundary image of the multiple term (PointBasedOptions::ms_boundary_image)
     float ms_image_offset = 0;  ///< its offset in transport mean free paths
     int vpt_max_depth = 0;   ///< VPT path cap in events (0: none; the paper's UPBP: 50)
+    gl::DepthSampling depth_sampling = gl::DepthSampling::min_extinction;  ///< camera samples of Eq. 10
     std::string table_read = "dense";  ///< the table the renderer reads: dense, merged (5 %), noise
     float eps1 = 1.0f, R_opt = 20.0f;
     gl::MsTableOptions table;
@@ -123,6 +124,7 @@ struct Result {
     std::size_t table_qt_noise_lobes = 0;
     double pb_mean = 0, ref_mean = 0, ref_se = 0, rel = 0, rel_se = 0;
     double mse = 0, ref_var_mean = 0, e2 = 0, e2_se = 0, pb_noise = 0, var_ps = 0, half_ratio = 0;
+    std::array<double, 4> pb_noise_comp{};  ///< the point-based noise of single, double, multiple, bounced
     double speedup = 0, events_per_path = 0;
     bool table_cached = false;
     std::size_t volume_samples = 0;
@@ -245,6 +247,7 @@ Result run_material(const gl_examples::Example& ex, const Material& mat, const S
     po.light_samples = 2;
     po.volume_step = 0.2f / sigma_t.average();
     po.k_max = st.k_max;
+    po.depth_sampling = st.depth_sampling;
     po.camera_bounces = 0;
     po.light_bounces = 0;
     po.max_optical_depth = 8.0f;
@@ -278,12 +281,16 @@ Result run_material(const gl_examples::Example& ex, const Material& mat, const S
         return (cell % side + cell / side) % 2;
     };
     c0 = cpu_seconds();
+    // Film 2 c + h holds the sum of half h's rays of component c (single, double, multiple,
+    // bounced): the halves' difference per component says which term the point-based noise is in.
+    constexpr int kPbComp = 4;
+    std::vector<double> comp_sums(std::size_t(2 * kPbComp) * npx * 3, 0.0);
     {
         // Rows through the render driver (wang18_bumpy.hpp: checkpoints, rows split over the MPI
-        // ranks, gathered on rank 0); film h holds the sum of half h's rays.
+        // ranks, gathered on rank 0).
         const std::vector<gl::Film> f = wang18::render_rows(
-            ex, std::string("wang18 ") + mat.key + " point-based", std::string(mat.key) + " point-based", W, H, 2,
-            st.pb_spp, [&](int y, std::span<gl::Film> film) {
+            ex, std::string("wang18 ") + mat.key + " point-based", std::string(mat.key) + " point-based", W, H,
+            2 * kPbComp, st.pb_spp, [&](int y, std::span<gl::Film> film) {
                 for (int x = 0; x < W; ++x) {
                     const std::size_t p = std::size_t(y) * W + x;
                     for (int s = 0; s < st.pb_spp; ++s) {
@@ -291,20 +298,27 @@ Result run_material(const gl_examples::Example& ex, const Material& mat, const S
                         const gl::Vec2f u = rng.uniform2<float>();
                         const int cell = s % (side * side);
                         const float fx = (float(cell % side) + u.x) / float(side), fy = (float(cell / side) + u.y) / float(side);
-                        const gl::RGB L = pb.radiance(camera.generate_ray(float(x) + fx, float(y) + fy), rng);
-                        film[std::size_t(half_of(s))].add_rgb(x, y, L[0], L[1], L[2]);
+                        const auto L = pb.radiance_components(camera.generate_ray(float(x) + fx, float(y) + fy), rng);
+                        const std::array<gl::RGB, kPbComp> parts{L.single, L.double_, L.multiple, L.bounced};
+                        for (int c = 0; c < kPbComp; ++c)
+                            film[std::size_t(2 * c + half_of(s))].add_rgb(x, y, parts[c][0], parts[c][1], parts[c][2]);
                     }
                 }
             });
-        for (int h = 0; h < 2; ++h) {
-            const auto sums = f[std::size_t(h)].sums();
-            for (std::size_t i = 0; i < npx * 3; ++i) pbh[std::size_t(h) * npx * 3 + i] = sums[i];
+        for (int c = 0; c < 2 * kPbComp; ++c) {
+            const auto sums = f[std::size_t(c)].sums();
+            for (std::size_t i = 0; i < npx * 3; ++i) {
+                comp_sums[std::size_t(c) * npx * 3 + i] = sums[i];
+                pbh[std::size_t(c % 2) * npx * 3 + i] += sums[i];
+            }
         }
     }
     r.seconds_pb = wang18::sum_over_ranks(ex, cpu_seconds() - c0);
     // Rays per half.
     std::array<int, 2> nh{0, 0};
     for (int s = 0; s < st.pb_spp; ++s) ++nh[std::size_t(half_of(s))];
+    // var(mean of all) = var per ray / n; E[d^2] = var per ray (1/n0 + 1/n1) for the halves' means' difference d.
+    const double noise_norm = double(st.pb_spp) * (1.0 / nh[0] + 1.0 / std::max(1, nh[1]));
     gl::Image pbi(W, H);
     double pb_noise = 0;
     for (std::size_t p = 0; p < npx; ++p)
@@ -313,10 +327,16 @@ Result run_material(const gl_examples::Example& ex, const Material& mat, const S
             pbi.at(int(p % W), int(p / W), ch) = float((a + b) / double(st.pb_spp));
             if (nh[1] > 0) {
                 const double d = a / nh[0] - b / nh[1];
-                // var(mean of all) = var per ray / n; E[d^2] = var per ray (1/n0 + 1/n1).
-                pb_noise += d * d / (double(st.pb_spp) * (1.0 / nh[0] + 1.0 / nh[1]));
+                pb_noise += d * d / noise_norm;
             }
         }
+    if (nh[1] > 0)
+        for (int c = 0; c < kPbComp; ++c)
+            for (std::size_t i = 0; i < npx * 3; ++i) {
+                const double d = comp_sums[std::size_t(2 * c) * npx * 3 + i] / nh[0] -
+                                 comp_sums[std::size_t(2 * c + 1) * npx * 3 + i] / nh[1];
+                r.pb_noise_comp[std::size_t(c)] += d * d / noise_norm;
+            }
 
     // --- VPT reference: one grey walk per channel, kBatches batches (sample s -> batch s % B). ---
     std::vector<SceneG> scenes;
@@ -414,6 +434,7 @@ Result run_material(const gl_examples::Example& ex, const Material& mat, const S
     r.mse /= n3;
     r.ref_var_mean /= n3;
     r.pb_noise = pb_noise / n3;
+    for (double& v : r.pb_noise_comp) v /= n3;
     r.var_ps = (var_ps[0] + var_ps[1]) / (2 * n3);
     r.half_ratio = var_ps[1] > 0 ? var_ps[0] / var_ps[1] : 0.0;
     const double e_mean = sum_e / n3;
@@ -521,6 +542,10 @@ int main(int argc, char** argv) {
             st.table_read = ex.opt<std::string>(
                 "table-read", "dense",
                 "table the renderer reads: dense, merged (quadtree merged within 5 %), noise (also merged within its noise)");
+            const std::string depth = ex.opt<std::string>(
+                "depth-sampling", "min",
+                "camera samples of Eq. 10 when the channels' sigma_t differ: min (exp(-sigma_min t)), average (Eq. 10 with the "
+                "mean sigma_t), mixture (balance heuristic over the channels)");
             const std::string paper_table = ex.opt<std::string>(
                 "paper-table", "none", "wax",
                 "build this material's table on the paper's 1024 x 512 x 18 x 36 grid and compress it (none: skip; ~6 GB)");
@@ -540,6 +565,10 @@ int main(int argc, char** argv) {
             if (photons < 1000) throw gl_examples::cli_error("--table-photons must be >= 1000");
             if (st.table_read != "dense" && st.table_read != "merged" && st.table_read != "noise")
                 throw gl_examples::cli_error("--table-read must be dense, merged or noise, got '" + st.table_read + "'");
+            if (depth == "min") st.depth_sampling = gl::DepthSampling::min_extinction;
+            else if (depth == "average") st.depth_sampling = gl::DepthSampling::average_extinction;
+            else if (depth == "mixture") st.depth_sampling = gl::DepthSampling::channel_mixture;
+            else throw gl_examples::cli_error("--depth-sampling must be min, average or mixture, got '" + depth + "'");
             const bool full = ex.full();
             st.table.n_rho = full ? 96 : 48;
             st.table.n_z = full ? 192 : 96;
@@ -589,6 +618,9 @@ int main(int argc, char** argv) {
                             "(%.1f MB) + table %.1f MB\n",
                             r.e2, r.e2_se, r.mse, r.ref_var_mean, r.pb_noise, r.e2 - r.pb_noise, r.var_ps,
                             r.half_ratio, r.volume_samples, r.samples_mb, r.table_mb);
+                if (ex.root()) std::printf("         point-based noise by component: single %.2e, double %.2e, multiple %.2e, bounced %.2e "
+                            "(the rest: their covariances)\n", r.pb_noise_comp[0], r.pb_noise_comp[1], r.pb_noise_comp[2],
+                            r.pb_noise_comp[3]);
                 if (ex.root()) std::printf("         table: dense %.1f MB, quadtree over empty regions %.1f MB (lossless), %.1f MB "
                             "(cells < 1e-4 of the peak dropped), %.2f MB (blocks merged within %.0f %% power-weighted L1), "
                             "%.2f MB (%zu lobes; also blocks flat within the table's noise)   "
@@ -625,6 +657,10 @@ int main(int argc, char** argv) {
                     .num("error2", r.e2)
                     .num("error2_stderr", r.e2_se)
                     .num("pb_noise", r.pb_noise)
+                    .num("pb_noise_single", r.pb_noise_comp[0])
+                    .num("pb_noise_double", r.pb_noise_comp[1])
+                    .num("pb_noise_multiple", r.pb_noise_comp[2])
+                    .num("pb_noise_bounced", r.pb_noise_comp[3])
                     .num("vpt_variance_per_sample", r.var_ps)
                     .num("vpt_variance_half_ratio", r.half_ratio)
                     .num("vpt_events_per_path", r.events_per_path)

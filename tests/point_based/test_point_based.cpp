@@ -282,3 +282,80 @@ TEST_CASE("point_based: single scattering through the octree equals Eq. 5 summed
 static_assert(grainlight::WidenableLobePhase<grainlight::HenyeyGreenstein<float, grainlight::Spectrum<1, float>>>);
 static_assert(!grainlight::WidenableLobePhase<grainlight::IsotropicPhase<float, grainlight::Spectrum<1, float>>>);
 static_assert(grainlight::detail::is_henyey_greenstein<grainlight::HenyeyGreenstein<float, grainlight::Spectrum<3, float>>>::value);
+
+TEST_CASE("point_based: camera samples of Eq. 10 integrate exp(-sigma_c t) f(t) in every channel, for every depth sampling",
+          "[point_based][depth-sampling]") {
+    // Channels with sigma_t 1 : 3 : 0.4 (BmpS.-like spread and more), a segment of 7 units.
+    // Reference: closed forms of int_0^L exp(-s t) dt and int_0^L t exp(-s t) dt.
+    using RGB = Spectrum<3, float>;
+    const RGB sig(1.0f, 3.0f, 0.4f);
+    const double L = 7.0;
+    const auto i0 = [&](double s) { return -std::expm1(-s * L) / s; };
+    const auto i1 = [&](double s) { return (1.0 - std::exp(-s * L) * (1.0 + s * L)) / (s * s); };
+    const int k_max = 6, trials = 20000;
+    for (const DepthSampling mode :
+         {DepthSampling::average_extinction, DepthSampling::min_extinction, DepthSampling::channel_mixture}) {
+        CAPTURE(int(mode));
+        const CameraDepthSampler<RGB> ds(sig, float(L), mode);
+        REQUIRE(ds.valid());
+        Rng rng = Rng::from_key(17, std::uint64_t(mode));
+        std::array<double, 3> s0{}, s1{}, q0{}, q1{};
+        double wmax_min = 0;
+        float prev = -1.0f;
+        for (int i = 0; i < trials; ++i) {
+            const float xi = rng.uniform<float>();
+            std::array<double, 3> e0{}, e1{};
+            for (int k = 0; k < k_max; ++k) {
+                RGB w;
+                const float d = ds.sample((float(k) + xi) / float(k_max), k_max, w);
+                REQUIRE(d >= 0.0f);
+                REQUIRE(d <= float(L));
+                if (i == 0) {  // depths increase with the quantile
+                    REQUIRE(d >= prev);
+                    prev = d;
+                }
+                for (int c = 0; c < 3; ++c) {
+                    REQUIRE(std::isfinite(w[c]));
+                    e0[c] += w[c];
+                    e1[c] += w[c] * d;
+                    if (mode == DepthSampling::min_extinction) wmax_min = std::max(wmax_min, double(w[c]));
+                }
+            }
+            for (int c = 0; c < 3; ++c) {
+                s0[c] += e0[c], s1[c] += e1[c], q0[c] += e0[c] * e0[c], q1[c] += e1[c] * e1[c];
+            }
+        }
+        for (int c = 0; c < 3; ++c) {
+            const double m0 = s0[c] / trials, m1 = s1[c] / trials;
+            const double se0 = std::sqrt(std::max(0.0, q0[c] / trials - m0 * m0) / trials) + 1e-6;
+            const double se1 = std::sqrt(std::max(0.0, q1[c] / trials - m1 * m1) / trials) + 1e-6;
+            CAPTURE(c, m0, i0(sig[c]), se0, m1, i1(sig[c]), se1);
+            CHECK(std::abs(m0 - i0(sig[c])) < 4 * se0);
+            CHECK(std::abs(m1 - i1(sig[c])) < 4 * se1);
+        }
+        // exp(-sigma_min t) sampling: every weight is at most (1 - exp(-sigma_min L)) / (sigma_min k_max).
+        if (mode == DepthSampling::min_extinction) CHECK(wmax_min <= -std::expm1(-0.4 * L) / (0.4 * k_max) * (1 + 1e-5));
+    }
+    // The mixture's depths are its quantiles: the mixture CDF at d(q) is q.
+    const CameraDepthSampler<RGB> mix(sig, float(L), DepthSampling::channel_mixture);
+    for (const double q : {0.0, 1e-4, 0.1, 0.37, 0.5, 0.9, 0.999}) {
+        RGB w;
+        const double d = mix.sample(float(q), 1, w);
+        double cdf = 0;
+        for (int c = 0; c < 3; ++c) cdf += -std::expm1(-sig[c] * d) / -std::expm1(-sig[c] * L) / 3.0;
+        CAPTURE(q, d, cdf);
+        CHECK(std::abs(cdf - q) < 2e-6);
+    }
+    // Equal channels: every mode places the same depths with the same weights.
+    const RGB same(2.0f);
+    for (const double q : {0.05, 0.5, 0.95}) {
+        RGB wa, wm, wx;
+        const float da = CameraDepthSampler<RGB>(same, 3.0f, DepthSampling::average_extinction).sample(float(q), 4, wa);
+        const float dm = CameraDepthSampler<RGB>(same, 3.0f, DepthSampling::min_extinction).sample(float(q), 4, wm);
+        const float dx = CameraDepthSampler<RGB>(same, 3.0f, DepthSampling::channel_mixture).sample(float(q), 4, wx);
+        CHECK(dm == Approx(da).epsilon(1e-6));
+        CHECK(dx == Approx(da).epsilon(1e-5));
+        CHECK(wm[0] == Approx(wa[0]).epsilon(1e-6));
+        CHECK(wx[0] == Approx(wa[0]).epsilon(1e-4));
+    }
+}
