@@ -347,57 +347,95 @@ struct SplitVpt {
     }
 };
 
-/// The VPT reference: batch sums bs[((k * kBatches + b) * npx + p) * 3 + ch] of component k.
+/// Index of film f, batch b, pixel p, channel ch in batch sums laid out as
+/// bs[((f * kBatches + b) * npx + p) * 3 + ch].
+[[nodiscard]] inline std::size_t batch_index(int f, int b, std::size_t npx, std::size_t p, int ch) {
+    return ((std::size_t(f) * kBatches + std::size_t(b)) * npx + p) * 3 + std::size_t(ch);
+}
+
+/// The VPT reference: batch sums of component k (layout of batch_index).
 struct VptRun {
     std::vector<double> bs;
     std::vector<gl::Image> img;  ///< mean image per component
     double cpu = 0;
     int spp = 0, W = 0, H = 0;
     [[nodiscard]] std::size_t idx(int k, int b, std::size_t p, int ch) const {
-        return ((std::size_t(k) * kBatches + std::size_t(b)) * std::size_t(W * H) + p) * 3 + std::size_t(ch);
+        return batch_index(k, b, std::size_t(W) * std::size_t(H), p, ch);
     }
 };
 
-/// The reference's walks (one grey walk per channel, `scenes[ch]`), batch b = samples s with
-/// s % kBatches == b, each batch one render_rows pass (checkpoint stem "<label> batch b") of
-/// kComp films whose sums go to v.bs (v.W, v.H, v.spp and v.bs sized by the caller). The sums
-/// per pixel, batch and channel add the samples in increasing s, as a single loop would.
-template <class Camera>
-inline void vpt_batches(const gl_examples::Example& ex, const std::string& label, int W, int H, int spp,
-                        std::uint64_t seed, const std::vector<SceneG>& scenes, const Camera& camera,
-                        const gl::WalkOptions<float>& wo, VptRun& v) {
+/// A reference in kBatches batches: batch b = samples s with s % kBatches == b, each batch one
+/// render_rows pass (progress label "<label> batch b+1/kBatches", checkpoint stem "<stem> batch
+/// b") of `Films` films. `sample(x, y, p, s, L)` writes sample s of pixel p (p = y W + x) into
+/// L[Films][3] (zeroed). The batch sums go to `bs` (sized by the caller, layout of
+/// batch_index); per pixel, batch and channel they add the samples in increasing s.
+template <int Films, class SampleFn>
+inline void batched_films(const gl_examples::Example& ex, const std::string& label, const std::string& stem, int W,
+                          int H, int spp, std::vector<double>& bs, SampleFn&& sample) {
     const std::size_t npx = std::size_t(W) * std::size_t(H);
     for (int b = 0; b < kBatches; ++b) {
         const std::vector<gl::Film> f = render_rows(
             ex, label + " batch " + std::to_string(b + 1) + "/" + std::to_string(kBatches),
-            label + " batch " + std::to_string(b), W, H, kComp, spp, [&](int y, std::span<gl::Film> film) {
+            stem + " batch " + std::to_string(b), W, H, Films, spp, [&](int y, std::span<gl::Film> film) {
                 for (int x = 0; x < W; ++x) {
                     const std::size_t p = std::size_t(y) * std::size_t(W) + std::size_t(x);
                     for (int s = b; s < spp; s += kBatches) {
-                        double L[kComp][3] = {};
-                        for (int ch = 0; ch < 3; ++ch) {
-                            gl::Rng rng = gl::Rng::from_key(seed, p, std::uint64_t(s) * 3 + std::uint64_t(ch));
-                            const gl::Vec2f u = rng.uniform2<float>();
-                            SplitVpt cb{scenes[std::size_t(ch)]};
-                            auto st = gl::start_path<float, Grey>(camera.generate_ray(float(x) + u.x, float(y) + u.y), -1);
-                            (void)gl::walk(scenes[std::size_t(ch)], st, rng, cb, wo);
-                            double tot = 0;
-                            for (int k = 0; k < 4; ++k) {
-                                L[k][ch] = cb.L[std::size_t(k)];
-                                tot += cb.L[std::size_t(k)];
-                            }
-                            L[4][ch] = tot;
-                        }
-                        for (int k = 0; k < kComp; ++k) film[std::size_t(k)].add_rgb(x, y, L[k][0], L[k][1], L[k][2]);
+                        double L[Films][3] = {};
+                        sample(x, y, p, s, L);
+                        for (int k = 0; k < Films; ++k) film[std::size_t(k)].add_rgb(x, y, L[k][0], L[k][1], L[k][2]);
                     }
                 }
             });
-        for (int k = 0; k < kComp; ++k) {
+        for (int k = 0; k < Films; ++k) {
             const auto sums = f[std::size_t(k)].sums();
             for (std::size_t p = 0; p < npx; ++p)
-                for (int ch = 0; ch < 3; ++ch) v.bs[v.idx(k, b, p, ch)] = sums[3 * p + std::size_t(ch)];
+                for (int ch = 0; ch < 3; ++ch) bs[batch_index(k, b, npx, p, ch)] = sums[3 * p + std::size_t(ch)];
         }
     }
+}
+
+/// Image mean (over pixels and channels) of film f of a batched reference with `spp` samples per
+/// pixel, and its standard error from the spread of the kBatches batch means.
+struct BatchMean {
+    double mean = 0, se = 0;
+};
+[[nodiscard]] inline BatchMean batch_mean(const std::vector<double>& bs, int f, std::size_t npx, int spp) {
+    const double per_batch = double(spp) / kBatches;
+    double bm[kBatches]{};
+    for (int b = 0; b < kBatches; ++b) {
+        double s = 0;
+        for (std::size_t i = 0; i < npx * 3; ++i) s += bs[batch_index(f, b, npx, 0, 0) + i];
+        bm[b] = s / (per_batch * double(npx * 3));
+    }
+    BatchMean r;
+    double var = 0;
+    for (double x : bm) r.mean += x / kBatches;
+    for (double x : bm) var += (x - r.mean) * (x - r.mean) / (kBatches - 1);
+    r.se = std::sqrt(var / kBatches);
+    return r;
+}
+
+/// The reference's walks (one grey walk per channel, `scenes[ch]`, components split by SplitVpt)
+/// through batched_films (stem = label); v.W, v.H, v.spp and v.bs sized by the caller.
+template <class Camera>
+inline void vpt_batches(const gl_examples::Example& ex, const std::string& label, int W, int H, int spp,
+                        std::uint64_t seed, const std::vector<SceneG>& scenes, const Camera& camera,
+                        const gl::WalkOptions<float>& wo, VptRun& v) {
+    batched_films<kComp>(ex, label, label, W, H, spp, v.bs, [&](int x, int y, std::size_t p, int s, double (&L)[kComp][3]) {
+        for (int ch = 0; ch < 3; ++ch) {
+            gl::Rng rng = gl::Rng::from_key(seed, p, std::uint64_t(s) * 3 + std::uint64_t(ch));
+            const gl::Vec2f u = rng.uniform2<float>();
+            SplitVpt cb{scenes[std::size_t(ch)]};
+            auto st = gl::start_path<float, Grey>(camera.generate_ray(float(x) + u.x, float(y) + u.y), -1);
+            (void)gl::walk(scenes[std::size_t(ch)], st, rng, cb, wo);
+            double tot = 0;
+            for (int k = 0; k < 4; ++k) {
+                L[k][ch] = cb.L[std::size_t(k)];
+                tot += cb.L[std::size_t(k)];
+            }
+            L[4][ch] = tot;
+        }
+    });
 }
 
 /// Render the reference with `spp` samples per pixel and channel (a multiple of kBatches).
@@ -447,17 +485,10 @@ inline Comparison compare(const PbRun& pb, const VptRun& v) {
     const std::size_t npx = std::size_t(v.W) * std::size_t(v.H);
     const double per_batch = double(v.spp) / kBatches;
     for (int k = 0; k < kComp; ++k) {
-        double bm[kBatches]{};
-        for (int b = 0; b < kBatches; ++b) {
-            double s = 0;
-            for (std::size_t i = 0; i < npx * 3; ++i) s += v.bs[v.idx(k, b, 0, 0) + i];
-            bm[b] = s / (per_batch * double(npx * 3));
-        }
-        double m = 0, var = 0;
-        for (double x : bm) m += x / kBatches;
-        for (double x : bm) var += (x - m) * (x - m) / (kBatches - 1);
+        const BatchMean bmean = batch_mean(v.bs, k, npx, v.spp);
+        const double m = bmean.mean;
         c.ref[k] = m;
-        c.ref_se[k] = std::sqrt(var / kBatches);
+        c.ref_se[k] = bmean.se;
         c.pb[k] = image_mean(pb.img[std::size_t(k)]);
         c.rel[k] = m > 0 ? (c.pb[k] - m) / m : 0.0;
         c.rel_se[k] = m > 0 ? c.ref_se[k] / m : 0.0;

@@ -197,45 +197,27 @@ int main(int argc, char** argv) {
                 scenes.push_back(std::move(s));
             }
             const std::size_t npx = std::size_t(W) * std::size_t(H);
-            // Batch sums bs[((f * 8 + b) * npx + p) * 3 + ch].
+            // Batch sums (layout of wang18::batch_index).
             std::vector<double> bs(std::size_t(kFilms) * wang18::kBatches * npx * 3, 0.0);
-            auto bidx = [&](int f, int b, std::size_t p, int ch) {
-                return ((std::size_t(f) * wang18::kBatches + std::size_t(b)) * npx + p) * 3 + std::size_t(ch);
-            };
             c0 = wang18::cpu_seconds();
-            for (int b = 0; b < wang18::kBatches; ++b) {
-                const std::vector<gl::Film> f = wang18::render_rows(
-                    ex, "VPT reference batch " + std::to_string(b + 1) + "/8", "vpt batch " + std::to_string(b), W, H, kFilms,
-                    vpt_spp, [&](int y, std::span<gl::Film> film) {
-                        for (int x = 0; x < W; ++x) {
-                            const std::size_t p = std::size_t(y) * std::size_t(W) + std::size_t(x);
-                            for (int s = b; s < vpt_spp; s += wang18::kBatches) {
-                                double v[kFilms][3] = {};
-                                for (int ch = 0; ch < 3; ++ch) {
-                                    gl::Rng rng = gl::Rng::from_key(seed, p, std::uint64_t(s) * 3 + std::uint64_t(ch));
-                                    const gl::Vec2f u = rng.uniform2<float>();
-                                    const gl::Ray<float> ray = sc.camera.generate_ray(float(x) + u.x, float(y) + u.y);
-                                    const auto& scene = scenes[std::size_t(ch)];
-                                    const bool direct = scene.intersect(ray).shape == vpt_object[std::size_t(ch)];
-                                    RoomVpt cb{scene, vpt_object[std::size_t(ch)]};
-                                    auto st = gl::start_path<float, wang18::Grey>(ray, -1);
-                                    (void)gl::walk(scene, st, rng, cb, gl::WalkOptions<float>{});
-                                    v[kAll][ch] = cb.all;
-                                    if (cb.room_after_scatter)
-                                        v[kObjLitByRoom][ch] = cb.object;
-                                    else
-                                        v[direct ? kObjDirect : kObjVia][ch] = cb.object;
-                                }
-                                for (int k = 0; k < kFilms; ++k) film[std::size_t(k)].add_rgb(x, y, v[k][0], v[k][1], v[k][2]);
-                            }
-                        }
-                    });
-                for (int k = 0; k < kFilms; ++k) {
-                    const auto sums = f[std::size_t(k)].sums();
-                    for (std::size_t p = 0; p < npx; ++p)
-                        for (int ch = 0; ch < 3; ++ch) bs[bidx(k, b, p, ch)] = sums[3 * p + std::size_t(ch)];
-                }
-            }
+            wang18::batched_films<kFilms>(
+                ex, "VPT reference", "vpt", W, H, vpt_spp, bs, [&](int x, int y, std::size_t p, int s, double (&v)[kFilms][3]) {
+                    for (int ch = 0; ch < 3; ++ch) {
+                        gl::Rng rng = gl::Rng::from_key(seed, p, std::uint64_t(s) * 3 + std::uint64_t(ch));
+                        const gl::Vec2f u = rng.uniform2<float>();
+                        const gl::Ray<float> ray = sc.camera.generate_ray(float(x) + u.x, float(y) + u.y);
+                        const auto& scene = scenes[std::size_t(ch)];
+                        const bool direct = scene.intersect(ray).shape == vpt_object[std::size_t(ch)];
+                        RoomVpt cb{scene, vpt_object[std::size_t(ch)]};
+                        auto st = gl::start_path<float, wang18::Grey>(ray, -1);
+                        (void)gl::walk(scene, st, rng, cb, gl::WalkOptions<float>{});
+                        v[kAll][ch] = cb.all;
+                        if (cb.room_after_scatter)
+                            v[kObjLitByRoom][ch] = cb.object;
+                        else
+                            v[direct ? kObjDirect : kObjVia][ch] = cb.object;
+                    }
+                });
             const double cpu_vpt = wang18::sum_over_ranks(ex, wang18::cpu_seconds() - c0);
             if (!ex.root()) return ex.finish({});
 
@@ -246,22 +228,15 @@ int main(int argc, char** argv) {
                 pimg[std::size_t(k)] = pf[std::size_t(k)].image();
                 pbm[std::size_t(k)] = wang18::image_mean(pimg[std::size_t(k)]);
                 vimg[std::size_t(k)] = gl::Image(W, H);
-                std::array<double, wang18::kBatches> bm{};
                 for (std::size_t p = 0; p < npx; ++p)
                     for (int ch = 0; ch < 3; ++ch) {
                         double s = 0;
-                        for (int b = 0; b < wang18::kBatches; ++b) {
-                            s += bs[bidx(k, b, p, ch)];
-                            bm[std::size_t(b)] += bs[bidx(k, b, p, ch)];
-                        }
+                        for (int b = 0; b < wang18::kBatches; ++b) s += bs[wang18::batch_index(k, b, npx, p, ch)];
                         vimg[std::size_t(k)].at(int(p % std::size_t(W)), int(p / std::size_t(W)), ch) = float(s / double(vpt_spp));
                     }
-                const double per_batch = double(vpt_spp / wang18::kBatches) * double(npx) * 3.0;
-                double mean = 0, m2 = 0;
-                for (double s : bm) mean += s / per_batch / wang18::kBatches;
-                for (double s : bm) m2 += (s / per_batch - mean) * (s / per_batch - mean);
-                ref[std::size_t(k)] = mean;
-                ref_se[std::size_t(k)] = std::sqrt(m2 / (wang18::kBatches - 1) / wang18::kBatches);
+                const wang18::BatchMean bm = wang18::batch_mean(bs, k, npx, vpt_spp);
+                ref[std::size_t(k)] = bm.mean;
+                ref_se[std::size_t(k)] = bm.se;
             }
             auto rel = [&](int k) { return ref[std::size_t(k)] > 0 ? pbm[std::size_t(k)] / ref[std::size_t(k)] - 1.0 : 0.0; };
             auto rel_se = [&](int k) { return ref[std::size_t(k)] > 0 ? ref_se[std::size_t(k)] / ref[std::size_t(k)] : 0.0; };
