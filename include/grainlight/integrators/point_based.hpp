@@ -190,7 +190,6 @@ enum class BounceReflection : std::uint8_t {
     specular,
 };
 
-/// Options of the point-based renderer (defaults follow the paper where it gives values).
 /// How the camera samples of Eq. 10 are placed along an inside segment when the extinction
 /// differs between channels (Eq. 10 is written for one sigma_t; every choice below is an unbiased
 /// quadrature of int_0^{d_max} exp(-sigma_t,c t) f(t) dt in every channel c, and they agree when
@@ -216,9 +215,10 @@ enum class DepthSampling : std::uint8_t {
 template <class S>
 class CameraDepthSampler {
 public:
-    using F = typename S::value_type;
-    static constexpr std::size_t N = S::size;
+    using F = typename S::value_type;         ///< scalar type
+    static constexpr std::size_t N = S::size;  ///< number of channels
 
+    /// Sampler for a segment of length `d_max` in a medium of extinction `sigma_t` (per channel).
     CameraDepthSampler(const S& sigma_t, F d_max, DepthSampling mode) noexcept
         : sig_(sigma_t), dmax_(d_max), mode_(mode) {
         smin_ = sigma_t.min_value();
@@ -293,6 +293,7 @@ private:
     std::array<F, N> norm_{};
 };
 
+/// Options of the point-based renderer (defaults follow the paper where it gives values).
 template <std::floating_point F>
 struct PointBasedOptions {
     int light_samples = 1;          ///< points on the light per surface sample (>= 1; 1 for delta lights)
