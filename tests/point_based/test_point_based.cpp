@@ -359,3 +359,31 @@ TEST_CASE("point_based: camera samples of Eq. 10 integrate exp(-sigma_c t) f(t) 
         CHECK(wx[0] == Approx(wa[0]).epsilon(1e-4));
     }
 }
+
+TEST_CASE("point_based: a channel without extinction keeps the camera samples of the others", "[point_based][depth-sampling]") {
+    // sigma_t = (0, 2): the bounded modes sample the segment uniformly; Eq. 10 with the mean keeps
+    // working. Every mode integrates exp(-sigma_c t) over [0, L] (closed forms L and (1 - e^{-2L}) / 2).
+    using RG = Spectrum<2, float>;
+    const RG sig(0.0f, 2.0f);
+    const float L = 1.5f;
+    for (const DepthSampling mode :
+         {DepthSampling::average_extinction, DepthSampling::min_extinction, DepthSampling::channel_mixture}) {
+        CAPTURE(int(mode));
+        const CameraDepthSampler<RG> ds(sig, L, mode);
+        REQUIRE(ds.valid());
+        double s0 = 0, s1 = 0;
+        const int n = 4096;  // a fine stratification of one pass: the quadrature converges
+        for (int k = 0; k < n; ++k) {
+            RG w;
+            const float d = ds.sample((float(k) + 0.5f) / float(n), n, w);
+            REQUIRE(d >= 0.0f);
+            REQUIRE(d <= L);
+            s0 += w[0];
+            s1 += w[1];
+        }
+        CHECK(s0 == Approx(L).epsilon(2e-3));
+        CHECK(s1 == Approx(-std::expm1(-2.0 * L) / 2.0).epsilon(2e-3));
+    }
+    CHECK_FALSE(CameraDepthSampler<RG>(sig, 0.0f, DepthSampling::min_extinction).valid());
+    CHECK_FALSE(CameraDepthSampler<RG>(RG(0.0f), 1.0f, DepthSampling::average_extinction).valid());
+}

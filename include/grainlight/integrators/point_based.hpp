@@ -222,17 +222,26 @@ public:
     CameraDepthSampler(const S& sigma_t, F d_max, DepthSampling mode) noexcept
         : sig_(sigma_t), dmax_(d_max), mode_(mode) {
         smin_ = sigma_t.min_value();
+        // A channel without extinction (sigma_t = 0) leaves the bounded modes nothing to follow:
+        // they sample the segment uniformly (weights exp(-sigma_t,c d) d_max / k_max <= d_max / k_max).
+        uniform_ = mode != DepthSampling::average_extinction && !(smin_ > F(0));
         sbar_ = mode == DepthSampling::average_extinction ? sigma_t.average() : smin_;
         for (std::size_t c = 0; c < N; ++c) norm_[c] = -std::expm1(-sig_[c] * d_max);
         norm_bar_ = -std::expm1(-sbar_ * d_max);
     }
-    /// False when the segment is empty (or sigma_t is not positive): no sample to take.
-    [[nodiscard]] bool valid() const noexcept { return norm_bar_ > F(0) && smin_ > F(0); }
+    /// False when there is no sample to take: an empty segment, or (Eq. 10 with the mean
+    /// sigma_t) no extinction in any channel.
+    [[nodiscard]] bool valid() const noexcept { return uniform_ ? dmax_ > F(0) : norm_bar_ > F(0); }
 
     /// The depth at quantile q in [0, 1) of the sampling density; `w` gets the weights of one of
     /// `k_max` stratified samples.
     F sample(F q, int k_max, S& w) const noexcept {
         F d;
+        if (uniform_) {
+            d = std::min(dmax_, q * dmax_);
+            for (std::size_t c = 0; c < N; ++c) w[c] = std::exp(-sig_[c] * d) * dmax_ / F(k_max);
+            return d;
+        }
         if (mode_ != DepthSampling::channel_mixture) {
             d = std::min(dmax_, -std::log1p(-q * norm_bar_) / sbar_);
             // exp(-sigma_t,c d) / (k_max pdf(d)) with pdf = sbar exp(-sbar d) / norm, written
@@ -289,6 +298,7 @@ private:
     S sig_;
     F dmax_;
     DepthSampling mode_;
+    bool uniform_ = false;
     F smin_ = F(0), sbar_ = F(0), norm_bar_ = F(0);
     std::array<F, N> norm_{};
 };
