@@ -388,17 +388,12 @@ Result run_material(const gl_examples::Example& ex, const Material& mat, const S
     r.events_per_path = ev / (double(npx) * 3.0 * st.vpt_spp);
     const double per_batch = double(st.vpt_spp) / kBatches;
 
-    // Image means per batch -> bias of the mean with its standard error.
-    double bm[kBatches]{};
-    for (int b = 0; b < kBatches; ++b) {
-        double s = 0;
-        for (std::size_t i = 0; i < npx * 3; ++i) s += bs[std::size_t(b) * npx * 3 + i];
-        bm[b] = s / (per_batch * double(npx * 3));
-    }
-    for (double x : bm) r.ref_mean += x / kBatches;
-    double v = 0;
-    for (double x : bm) v += (x - r.ref_mean) * (x - r.ref_mean) / (kBatches - 1);
-    r.ref_se = std::sqrt(v / kBatches);
+    // Image means per batch -> bias of the mean with its standard error (bs holds one film in
+    // wang18::batch_index's layout).
+    static_assert(kBatches == wang18::kBatches);
+    const wang18::BatchMean ref_mean = wang18::batch_mean(bs, 0, npx, st.vpt_spp);
+    r.ref_mean = ref_mean.mean;
+    r.ref_se = ref_mean.se;
     r.pb_mean = (pbi.mean(0) + pbi.mean(1) + pbi.mean(2)) / 3.0;
     r.rel = r.ref_mean > 0 ? (r.pb_mean - r.ref_mean) / r.ref_mean : 0.0;
     r.rel_se = r.ref_mean > 0 ? r.ref_se / r.ref_mean : 0.0;
