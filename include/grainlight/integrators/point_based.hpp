@@ -226,7 +226,8 @@ public:
         // they sample the segment uniformly (weights exp(-sigma_t,c d) d_max / k_max <= d_max / k_max).
         uniform_ = mode != DepthSampling::average_extinction && !(smin_ > F(0));
         sbar_ = mode == DepthSampling::average_extinction ? sigma_t.average() : smin_;
-        for (std::size_t c = 0; c < N; ++c) norm_[c] = -std::expm1(-sig_[c] * d_max);
+        if (mode == DepthSampling::channel_mixture && !uniform_)  // only the mixture reads them
+            for (std::size_t c = 0; c < N; ++c) norm_[c] = -std::expm1(-sig_[c] * d_max);
         norm_bar_ = -std::expm1(-sbar_ * d_max);
     }
     /// False when there is no sample to take: an empty segment, or (Eq. 10 with the mean
@@ -300,7 +301,7 @@ private:
     DepthSampling mode_;
     bool uniform_ = false;
     F smin_ = F(0), sbar_ = F(0), norm_bar_ = F(0);
-    std::array<F, N> norm_{};
+    std::array<F, N> norm_{};  ///< 1 - exp(-sigma_t,c d_max) per channel (channel_mixture only)
 };
 
 /// Options of the point-based renderer (defaults follow the paper where it gives values).
