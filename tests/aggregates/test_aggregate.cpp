@@ -170,13 +170,13 @@ TEST_CASE("aggregate: memory independent of the grain count, counts scale with v
     {
         GranularAggregate<SphereBoundary> a(tile, VoxelizedBoundary<SphereBoundary>(SphereBoundary(Vec3d(0.0), 4.0), 2.0),
                                             three_exemplars(), {1, 1, 1});
-        mem_small = a.memory_bytes() - a.boundary().memory_bytes() - a.boundary().refinement_bytes();
+        mem_small = a.memory_bytes() - a.boundary().memory_bytes() - a.boundary().refinement_bytes() - a.packing().reach_bytes();
         n_small = a.grain_count();
     }
     {
         GranularAggregate<SphereBoundary> a(tile, VoxelizedBoundary<SphereBoundary>(SphereBoundary(Vec3d(0.0), 16.0), 2.0),
                                             three_exemplars(), {1, 1, 1});
-        mem_big = a.memory_bytes() - a.boundary().memory_bytes() - a.boundary().refinement_bytes();
+        mem_big = a.memory_bytes() - a.boundary().memory_bytes() - a.boundary().refinement_bytes() - a.packing().reach_bytes();
         n_big = a.grain_count();
     }
     REQUIRE(mem_small == mem_big);

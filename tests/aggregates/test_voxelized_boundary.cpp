@@ -143,8 +143,69 @@ TEST_CASE("voxelized mesh: icosphere vs the analytic sphere, majority-parity poi
     }
     REQUIRE(tested > 4000);
     REQUIRE(vb.refined());
-    // 16 bytes of sub-voxel classes per partial voxel, 4 bytes of rank per 64-bit word of classes.
-    REQUIRE(vb.refinement_bytes() == vb.partial_count() * 16 + vb.memory_bytes() / 2);
+    // 16 bytes of sub-voxel classes per partial voxel, 4 bytes of rank per 64-bit word of classes,
+    // and the partial voxels' triangle lists.
+    REQUIRE(vb.partial_surface().ref_inside.size() == vb.partial_count());
+    REQUIRE(vb.refinement_bytes() ==
+            vb.partial_count() * 16 + vb.memory_bytes() / 2 + vb.partial_surface().memory_bytes());
+}
+
+TEST_CASE("voxelized mesh: the local point test in partial voxels agrees with the mesh's own", "[aggregates][voxel]") {
+    // In a partial voxel the point test is the parity of the segment from the voxel's reference
+    // point against the voxel's triangles (PartialVoxelSurface). Checked against MeshBoundary::
+    // inside (three parity rays through the whole mesh, majority) at points within 0.3 voxel of
+    // the surface, where both the sub-voxels and the local test are used; every reference point's
+    // stored side is checked too. Two meshes: an icosphere off the grid and a box whose faces lie
+    // on voxel faces and centres.
+    TriangleMesh<float> ico = make_icosphere<float>(3);
+    for (auto& v : ico.vertices) v = 5.3f * v + Vec3f(0.37f, -0.21f, 0.11f);
+    ico.compute_face_normals();
+    TriangleMesh<float> box;  // [-3, 3] x [-2.5, 2] x [-4, 3.5]: faces on voxel faces and mid-planes
+    for (int c = 0; c < 8; ++c)
+        box.vertices.push_back(Vec3f(c & 1 ? 3.0f : -3.0f, c & 2 ? 2.0f : -2.5f, c & 4 ? 3.5f : -4.0f));
+    box.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                     {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+    box.compute_face_normals();
+    for (const TriangleMesh<float>* mesh : {&ico, &box}) {
+        const MeshBoundary mb(*mesh);
+        const VoxelizedBoundary<MeshBoundary> vb(mb, 1.0);
+        const PartialVoxelSurface& ps = vb.partial_surface();
+        REQUIRE(ps.ref_inside.size() == vb.partial_count());
+        REQUIRE(ps.tri_start.size() == vb.partial_count() + 1);
+        // Every reference point's side.
+        const auto& d = vb.dims();
+        const auto& lo = vb.grid_lo();
+        const Vec3d origin = Vec3d(double(lo[0]), double(lo[1]), double(lo[2]));
+        std::size_t r = 0;
+        for (std::int64_t k = 0; k < d[2]; ++k)
+            for (std::int64_t j = 0; j < d[1]; ++j)
+                for (std::int64_t i = 0; i < d[0]; ++i) {
+                    if (vb.classify(Vec3i64(lo[0] + i, lo[1] + j, lo[2] + k)) != VoxelClass::partial) continue;
+                    const Vec3d ref = MeshBoundary::reference_point(origin, 1.0, i, j, k);
+                    REQUIRE((ps.ref_inside[r] != 0) == mb.inside(ref));
+                    REQUIRE(ps.tri_start[r + 1] > ps.tri_start[r]);  // a partial voxel has triangles
+                    ++r;
+                }
+        // Points near the surface: random vertices pushed along their normals by up to 0.3.
+        Rng rng = Rng::from_key(11, 12);
+        int in = 0, out = 0;
+        for (int n = 0; n < 20000; ++n) {
+            const auto& tri = mesh->triangles[rng.next_u32(std::uint32_t(mesh->triangles.size()))];
+            const Vec2d u = rng.uniform2<double>();
+            const double a = std::sqrt(u.x);
+            const Vec3d v0(mesh->vertices[tri[0]]), v1(mesh->vertices[tri[1]]), v2(mesh->vertices[tri[2]]);
+            const Vec3d on = (1 - a) * v0 + a * (1 - u.y) * v1 + a * u.y * v2;
+            const Vec3d nrm = glm::normalize(glm::cross(v1 - v0, v2 - v0));
+            const Vec3d p = on + (0.6 * rng.uniform<double>() - 0.3) * nrm +
+                            0.05 * Vec3d(rng.uniform<double>() - 0.5, rng.uniform<double>() - 0.5, rng.uniform<double>() - 0.5);
+            const Vec3i64 t(std::int64_t(std::floor(p.x)), std::int64_t(std::floor(p.y)), std::int64_t(std::floor(p.z)));
+            const bool want = mb.inside(p);
+            REQUIRE(vb.point_inside(t, p - Vec3d(t)) == want);
+            (want ? in : out) += 1;
+        }
+        CHECK(in > 5000);
+        CHECK(out > 5000);
+    }
 }
 
 TEST_CASE("voxelized boundary: bad input is a clear error", "[aggregates][voxel]") {

@@ -223,3 +223,33 @@ TEST_CASE("Algorithm 1 with a voxelized boundary agrees with brute force", "[til
     CHECK(hits_sph > 30);
     CHECK(skipped > 0);  // outside voxels were skipped, and results still match brute force
 }
+
+TEST_CASE("the reach grid answers what the 27 neighbour classes say", "[tiled]") {
+    // TiledPacking precomputes, for a classifier with a tile range, one bit per tile: is the tile
+    // or one of its 26 neighbours not outside? Compared here with the definition, by 27 calls to
+    // the classifier, on every tile of the range grown by three, for a voxelized sphere far from
+    // the origin and an off-centre one that crosses tile boundaries differently.
+    for (const auto& [centre, radius] : {std::pair{Vec3d(0.3, 0.2, -0.1), 2.2}, std::pair{Vec3d(-1.7, 4.1, 0.6), 3.4}}) {
+        const Vec3i64 anchor(-7000000, 12, 3);
+        const SphereBoundary shape(centre, radius);
+        const VoxelizedBoundary<SphereBoundary> vox(shape, 1.0, anchor);
+        const TiledPacking<VoxelizedBoundary<SphereBoundary>> pk(test_tile(), vox, {1.0}, 3);
+        REQUIRE(pk.reach_bytes() > 0);
+        const Vec3i64 lo = vox.tile_lo(), hi = vox.tile_hi();
+        std::size_t reachable = 0, total = 0;
+        for (std::int64_t z = lo.z - 3; z <= hi.z + 3; ++z)
+            for (std::int64_t y = lo.y - 3; y <= hi.y + 3; ++y)
+                for (std::int64_t x = lo.x - 3; x <= hi.x + 3; ++x) {
+                    bool expect = false;
+                    for (int dz = -1; dz <= 1; ++dz)
+                        for (int dy = -1; dy <= 1; ++dy)
+                            for (int dx = -1; dx <= 1; ++dx)
+                                expect |= vox.classify(Vec3i64(x + dx, y + dy, z + dz)) != VoxelClass::outside;
+                    REQUIRE(pk.tile_reachable(Vec3i64(x, y, z)) == expect);
+                    reachable += expect;
+                    ++total;
+                }
+        CHECK(reachable > 27);
+        CHECK(reachable < total);
+    }
+}

@@ -139,6 +139,98 @@ TEST_CASE("walk_spheres with a tile filter only drops spheres of rejected tiles"
     CHECK(visits_rejected > 100);
 }
 
+TEST_CASE("walk_spheres jumps over rejected tiles: every tile the ray crosses is offered, in order, once",
+          "[tile][walk]") {
+    // A rejected tile with no pending candidate is crossed in one jump (not cell by cell). The
+    // tiles offered to the filter must still be the tiles the ray crosses, in order: found here
+    // by sampling the ray every 1e-4 tile sides. Tiles the ray only grazes (a dwell below 1e-3
+    // tile sides, e.g. a corner) may be skipped; no other tile may be offered. Half the tiles are
+    // rejected (a hash), so runs of rejected tiles alternate with searched ones.
+    Rng trng = Rng::from_key(43);
+    const PeriodicTile tile = random_sequential_addition(50, 0.33, trng, 1.0);
+    const double L = tile.side();
+    auto accepted = [](const Vec3i64& t) {
+        const std::uint64_t h = (std::uint64_t(t.x) * 0x9E3779B97F4A7C15ull) ^ (std::uint64_t(t.y) * 0xC2B2AE3D27D4EB4Full) ^
+                                (std::uint64_t(t.z) * 0x165667B19E3779F9ull);
+        return ((h >> 29) & 1u) == 0;
+    };
+    Rng rng = Rng::from_key(44);
+    std::size_t offered_total = 0, rejected_total = 0;
+    for (int k = 0; k < 200; ++k) {
+        const Vec3i64 ot(3, -9, 987654321);
+        const Vec3d o(rng.uniform<double>() * L, rng.uniform<double>() * L, rng.uniform<double>() * L);
+        Vec3d d = sample_uniform_sphere<double>(rng.uniform2<double>());
+        if (k % 10 == 0) d = glm::normalize(Vec3d(1.0, 1e-3 * rng.uniform<double>(), 0.0));  // nearly axis-aligned
+        const double t_max = 12.0 * L;
+        std::vector<Vec3i64> offered;
+        std::vector<TileHit> got;
+        (void)tile.walk_spheres(
+            ot, o, d, 0.0, t_max,
+            [&](const Vec3i64& t) {
+                offered.push_back(t);
+                return accepted(t);
+            },
+            [&](const TileHit& h) {
+                got.push_back(h);
+                return false;
+            });
+        // The crossed tiles with their entry and dwell lengths, by sampling (past t_max: the walk
+        // may offer the tile it steps into when it leaves the last one).
+        struct Crossed {
+            Vec3i64 tile;
+            double t0, dwell;
+        };
+        std::vector<Crossed> crossed;
+        const double dt = 1e-4 * L;
+        for (double s = 0; s <= t_max + 2 * L; s += dt) {
+            const Vec3d p = o + s * d;
+            Vec3i64 t = ot;
+            for (int a = 0; a < 3; ++a) t[a] += static_cast<std::int64_t>(std::floor(p[a] / L));
+            if (crossed.empty() || !(crossed.back().tile == t)) crossed.push_back({t, s, 0.0});
+            crossed.back().dwell += dt;
+        }
+        std::size_t j = 0;
+        for (const auto& [t, t0, dwell] : crossed) {
+            const std::size_t j0 = j;
+            while (j < offered.size() && !(offered[j] == t)) ++j;
+            if (dwell > 1e-3 * L && t0 < t_max - 1e-3 * L) REQUIRE(j < offered.size());  // every crossing, in order
+            if (j == offered.size()) j = j0;  // a grazed tile that was not offered
+            else ++j;
+        }
+        for (const Vec3i64& t : offered) {  // nothing else is offered
+            bool known = false;
+            for (const auto& c : crossed) known |= c.tile == t;
+            CHECK(known);
+        }
+        // The spheres are those of repeated first_hit whose chord meets an accepted tile.
+        const std::vector<TileHit> all = by_first_hit(tile, ot, o, d, 0.0, t_max, 4000);
+        std::size_t m = 0;
+        for (const TileHit& h : got) {
+            while (m < all.size() && !same(all[m], h)) ++m;
+            REQUIRE(m < all.size());
+            ++m;
+        }
+        for (const TileHit& h : all) {
+            const Vec3d p = o + 0.5 * (std::max(h.t_enter, 0.0) + std::min(h.t_exit, t_max)) * d;
+            Vec3i64 t = ot;
+            bool near_face = false;
+            for (int a = 0; a < 3; ++a) {
+                const double q = p[a] / L;
+                t[a] += static_cast<std::int64_t>(std::floor(q));
+                near_face |= std::abs(q - std::round(q)) < 1e-9;
+            }
+            if (near_face || !accepted(t)) continue;
+            bool found = false;
+            for (const TileHit& g : got) found |= same(g, h);
+            CHECK(found);
+        }
+        offered_total += offered.size();
+        for (const Vec3i64& t : offered) rejected_total += !accepted(t);
+    }
+    CHECK(offered_total > 1000);
+    CHECK(rejected_total > 300);
+}
+
 TEST_CASE("floor_i64 is the exact floor, saturated; walk_spheres' tile split agrees with floor_div", "[tile][walk]") {
     // Closed forms: floor of integers, of values just off them, of negatives, saturation.
     using detail::floor_i64;

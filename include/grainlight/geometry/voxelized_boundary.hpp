@@ -223,6 +223,25 @@ namespace detail {
 
 }  // namespace detail
 
+/// What a shape's classify_grid may also return about the partial voxels (grid order) so that a
+/// point test there needs no global query: the triangles overlapping each partial voxel (CSR:
+/// `tri_ids[tri_start[r] .. tri_start[r + 1])` for the r-th partial voxel) and whether the
+/// voxel's reference point (MeshBoundary::reference_point) is inside. A point of the voxel is
+/// then inside iff the segment from the reference point crosses those triangles an odd number of
+/// times relative to it (the segment lies in the voxel, so no other triangle can cross it).
+struct PartialVoxelSurface {
+    /// One entry per partial voxel: 1 if its reference point is inside.
+    std::vector<std::uint8_t> ref_inside;
+    /// CSR offsets into tri_ids (partial voxels + 1 entries).
+    std::vector<std::uint32_t> tri_start;
+    /// Triangle indices overlapping each partial voxel.
+    std::vector<std::uint32_t> tri_ids;
+    /// Bytes held.
+    [[nodiscard]] std::size_t memory_bytes() const noexcept {
+        return ref_inside.size() + (tri_start.size() + tri_ids.size()) * sizeof(std::uint32_t);
+    }
+};
+
 /// A watertight, consistently oriented (outward normals) triangle mesh as an aggregate boundary.
 /// Throws grainlight::invalid_argument for an invalid, non-watertight or inside-out mesh.
 class MeshBoundary {
@@ -294,10 +313,14 @@ public:
     /// voxel (i, j, k) at index (k dims.y + j) dims.x + i: voxels overlapped by a triangle are
     /// partial (exact triangle-box test); the others take the inside/outside state of their
     /// interior, from a majority of three parity sweeps along the grid rows of x, y and z.
+    /// With `surface`, also the triangles of each partial voxel and the side of its reference
+    /// point (a majority of the three parity sweeps, each carried to the reference point by the
+    /// parity of a segment inside the voxel), for inside_local.
     void classify_grid(const Vec3d& origin, double side, const std::array<std::int64_t, 3>& dims,
-                       std::vector<VoxelClass>& out) const {
+                       std::vector<VoxelClass>& out, PartialVoxelSurface* surface = nullptr) const {
         const std::size_t n = std::size_t(dims[0] * dims[1] * dims[2]);
         out.assign(n, VoxelClass::outside);
+        std::vector<std::pair<std::uint64_t, std::uint32_t>> overlaps;  // (voxel, triangle) when `surface`
         auto index = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
             return std::size_t((k * dims[1] + j) * dims[0] + i);
         };
@@ -314,7 +337,10 @@ public:
                 for (std::int64_t j = a[1]; j <= b[1]; ++j)
                     for (std::int64_t i = a[0]; i <= b[0]; ++i) {
                         const Vec3d c = origin + side * Vec3d(double(i) + 0.5, double(j) + 0.5, double(k) + 0.5);
-                        if (detail::triangle_box_overlap(c, h, t[0], t[1], t[2])) out[index(i, j, k)] = VoxelClass::partial;
+                        if (detail::triangle_box_overlap(c, h, t[0], t[1], t[2])) {
+                            out[index(i, j, k)] = VoxelClass::partial;
+                            if (surface) overlaps.emplace_back(std::uint64_t(index(i, j, k)), std::uint32_t(&t - tris_.data()));
+                        }
                     }
         }
         // Inside/outside of the remaining voxels: parity along rows of voxel centres.
@@ -349,13 +375,69 @@ public:
                             c[ax] = i;
                             c[u] = ju;
                             c[v] = jv;
-                            ++votes[index(c[0], c[1], c[2])];
+                            votes[index(c[0], c[1], c[2])] |= std::uint8_t(1u << ax);  // sweep ax says inside
                         }
                     }
                 }
         }
         for (std::size_t i = 0; i < n; ++i)
-            if (out[i] != VoxelClass::partial) out[i] = votes[i] >= 2 ? VoxelClass::inside : VoxelClass::outside;
+            if (out[i] != VoxelClass::partial) out[i] = std::popcount(unsigned(votes[i])) >= 2 ? VoxelClass::inside : VoxelClass::outside;
+        if (!surface) return;
+        // Partial voxels: their triangles (grid order, CSR) and the side of their reference point.
+        std::sort(overlaps.begin(), overlaps.end());
+        surface->ref_inside.clear();
+        surface->tri_start.assign(1, 0);
+        surface->tri_ids.clear();
+        surface->tri_ids.reserve(overlaps.size());
+        std::size_t q = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            if (out[i] != VoxelClass::partial) continue;
+            const std::size_t first = surface->tri_ids.size();
+            for (; q < overlaps.size() && overlaps[q].first <= i; ++q)
+                if (overlaps[q].first == i) surface->tri_ids.push_back(overlaps[q].second);
+            surface->tri_start.push_back(std::uint32_t(surface->tri_ids.size()));
+            const std::int64_t x = std::int64_t(i) % dims[0], y = (std::int64_t(i) / dims[0]) % dims[1],
+                               z = std::int64_t(i) / (dims[0] * dims[1]);
+            const Vec3d ref = reference_point(origin, side, x, y, z);
+            const std::uint32_t* ids = surface->tri_ids.data() + first;
+            const std::size_t m = surface->tri_ids.size() - first;
+            int says_inside = 0;
+            for (int ax = 0; ax < 3; ++ax) {  // sweep ax's point, carried to the reference point
+                const int u = (ax + 1) % 3, v = (ax + 2) % 3;
+                const std::int64_t c[3] = {x, y, z};
+                Vec3d p(0.0);
+                p[ax] = origin[ax] + (double(c[ax]) + 0.5 + 0.0113 * (ax + 1)) * side;
+                p[u] = origin[u] + (double(c[u]) + 0.5 + 0.0173 * (ax + 1)) * side;
+                p[v] = origin[v] + (double(c[v]) + 0.5 - 0.0291 * (ax + 1)) * side;
+                says_inside += inside_local(p, (votes[i] >> ax) & 1u, ref, ids, m);
+            }
+            surface->ref_inside.push_back(std::uint8_t(says_inside >= 2));
+        }
+    }
+
+    /// The reference point of voxel (i, j, k) of a grid at `origin` with voxels of side `side`:
+    /// the point of the voxel that classify_grid's sweep along x classifies (off-centre).
+    [[nodiscard]] static Vec3d reference_point(const Vec3d& origin, double side, std::int64_t i, std::int64_t j,
+                                               std::int64_t k) noexcept {
+        return Vec3d(origin[0] + (double(i) + 0.5 + 0.0113) * side, origin[1] + (double(j) + 0.5 + 0.0173) * side,
+                     origin[2] + (double(k) + 0.5 - 0.0291) * side);
+    }
+    /// Is p inside, given a point `ref` whose side is known (`ref_inside`) and the triangles
+    /// `ids[0..m)` that contain every surface crossing of the segment ref -> p (e.g. both points
+    /// in one partial voxel and its triangles, PartialVoxelSurface)? The parity of the segment's
+    /// crossings, by the watertight test (a crossing through a shared edge counts once).
+    [[nodiscard]] bool inside_local(const Vec3d& ref, bool ref_inside, const Vec3d& p, const std::uint32_t* ids,
+                                    std::size_t m) const noexcept {
+        const Vec3d d = p - ref;
+        if (m == 0 || !(glm::dot(d, d) > 0)) return ref_inside;
+        const WatertightRay<double> wr(ref, d);
+        int crossings = 0;
+        double t = 0, b1 = 0, b2 = 0;
+        for (std::size_t k = 0; k < m; ++k) {
+            const auto& tri = tris_[ids[k]];
+            crossings += intersect_triangle_watertight(wr, tri[0], tri[1], tri[2], 0.0, 1.0, t, b1, b2) ? 1 : 0;
+        }
+        return ref_inside != ((crossings & 1) != 0);
     }
 
 private:
@@ -393,7 +475,13 @@ public:
         const std::size_t n = std::size_t(total);
         bits_.assign((n + 31) / 32, 0);
         const Vec3d origin = side_ * Vec3d(double(lo_[0]), double(lo_[1]), double(lo_[2]));
-        if constexpr (requires(std::vector<VoxelClass>& out) { shape_.classify_grid(origin, side_, dims_, out); }) {
+        if constexpr (requires(std::vector<VoxelClass>& out, PartialVoxelSurface* ps) {
+                          shape_.classify_grid(origin, side_, dims_, out, ps);
+                      }) {
+            std::vector<VoxelClass> cls;
+            shape_.classify_grid(origin, side_, dims_, cls, &surface_);
+            for (std::size_t i = 0; i < n; ++i) set(i, cls[i]);
+        } else if constexpr (requires(std::vector<VoxelClass>& out) { shape_.classify_grid(origin, side_, dims_, out); }) {
             std::vector<VoxelClass> cls;
             shape_.classify_grid(origin, side_, dims_, cls);
             for (std::size_t i = 0; i < n; ++i) set(i, cls[i]);
@@ -413,6 +501,7 @@ public:
             if (c == VoxelClass::inside) ++n_inside_;
             if (c == VoxelClass::partial) ++n_partial_;
         }
+        if (n_partial_ > 0) build_partial_rank();
         refine(origin);
     }
 
@@ -436,10 +525,14 @@ public:
     /// (e.g. a mesh BVH for the partial-voxel test) and the refinement are separate.
     [[nodiscard]] std::size_t memory_bytes() const noexcept { return bits_.size() * sizeof(std::uint64_t); }
     /// Bytes of the sub-voxel refinement of the partial voxels (16 per partial voxel and 4 per
-    /// 32 voxels for the rank index, or 0).
+    /// 32 voxels for the rank index, or 0) and of the partial voxels' triangle lists (meshes).
     [[nodiscard]] std::size_t refinement_bytes() const noexcept {
-        return partial_rank_.size() * sizeof(std::uint32_t) + sub_bits_.size() * sizeof(sub_bits_[0]);
+        return partial_rank_.size() * sizeof(std::uint32_t) + sub_bits_.size() * sizeof(sub_bits_[0]) +
+               surface_.memory_bytes();
     }
+    /// The partial voxels' triangle lists and reference-point sides (empty unless the shape's
+    /// classify_grid provides them: MeshBoundary); point_inside uses them in partial voxels.
+    [[nodiscard]] const PartialVoxelSurface& partial_surface() const noexcept { return surface_; }
     /// True if partial voxels carry a 4^3 sub-voxel classification (see point_inside).
     [[nodiscard]] bool refined() const noexcept { return !sub_bits_.empty(); }
 
@@ -453,21 +546,37 @@ public:
     /// `tile` inside the shape? Uses the voxel class and, in partial voxels, the shape's own test.
     /// A partial voxel is refined into 4^3 sub-voxels (2 bits each, stored only for partial
     /// voxels): the shape's own (possibly costly: ray parity against a mesh) test runs only in
-    /// partial sub-voxels. Not a part of Meng15; it makes the partial-voxel test cheap.
+    /// partial sub-voxels. A mesh's test there is local: the parity of the segment from the
+    /// voxel's reference point against the voxel's own triangles (PartialVoxelSurface), not three
+    /// rays through the whole mesh. Not a part of Meng15; it makes the partial-voxel test cheap
+    /// (grids too large for the sub-voxels, e.g. Fig. 1's castle, rely on the local test alone).
     [[nodiscard]] bool point_inside(const Vec3i64& tile, const Vec3d& local) const noexcept {
         std::size_t idx = 0;
         if (!grid_index(tile, idx)) return false;
         const VoxelClass c = get(idx);
         if (c != VoxelClass::partial) return c == VoxelClass::inside;
+        const std::size_t rank = partial_rank(idx);
         if (!sub_bits_.empty()) {
             int q[3];
             for (int a = 0; a < 3; ++a) q[a] = std::clamp(int(local[a] / side_ * sub), 0, sub - 1);
-            const auto& w = sub_bits_[partial_rank(idx)];
+            const auto& w = sub_bits_[rank];
             const int si = (q[2] * sub + q[1]) * sub + q[0];
             const auto sc = VoxelClass((w[std::size_t(si >> 5)] >> (2 * (si & 31))) & 3u);
             if (sc != VoxelClass::partial) return sc == VoxelClass::inside;
         }
-        return shape_.inside(to_shape_frame(tile, local));
+        const Vec3d p = to_shape_frame(tile, local);
+        if constexpr (requires(const std::uint32_t* ids) { shape_.inside_local(p, true, p, ids, std::size_t(0)); }) {
+            if (!surface_.tri_start.empty()) {  // parity from the voxel's reference point, its triangles only
+                std::int64_t r[3];
+                for (int a = 0; a < 3; ++a) r[a] = tile[a] - anchor_[a] - lo_[a];
+                const Vec3d origin = side_ * Vec3d(double(lo_[0]), double(lo_[1]), double(lo_[2]));
+                const Vec3d ref = Shape::reference_point(origin, side_, r[0], r[1], r[2]);
+                const std::uint32_t b = surface_.tri_start[rank], e = surface_.tri_start[rank + 1];
+                return shape_.inside_local(ref, surface_.ref_inside[rank] != 0, p, surface_.tri_ids.data() + b,
+                                           std::size_t(e - b));
+            }
+        }
+        return shape_.inside(p);
     }
     /// Shape-frame position of a point given as (absolute tile, local offset).
     [[nodiscard]] Vec3d to_shape_frame(const Vec3i64& tile, const Vec3d& local) const noexcept {
@@ -504,13 +613,6 @@ private:
                         }
                         sub_bits_.push_back(w);
                     }
-            // Rank index: partial voxels before each 64-bit word of classes (a popcount inside it).
-            partial_rank_.resize(bits_.size());
-            std::uint32_t before = 0;
-            for (std::size_t wi = 0; wi < bits_.size(); ++wi) {
-                partial_rank_[wi] = before;
-                before += std::uint32_t(std::popcount(partial_lanes(bits_[wi])));
-            }
         };
         const double h = side_ / sub;
         if constexpr (requires(std::vector<VoxelClass>& out) { shape_.classify_grid(origin, side_, dims_, out); }) {
@@ -527,6 +629,16 @@ private:
                 const Vec3d lo = origin + side_ * Vec3d(double(x), double(y), double(z)) + h * Vec3d(qx, qy, qz);
                 return shape_.classify_box(lo, lo + Vec3d(h));
             });
+        }
+    }
+
+    /// Rank index: partial voxels before each 64-bit word of classes (a popcount inside it).
+    void build_partial_rank() {
+        partial_rank_.resize(bits_.size());
+        std::uint32_t before = 0;
+        for (std::size_t wi = 0; wi < bits_.size(); ++wi) {
+            partial_rank_[wi] = before;
+            before += std::uint32_t(std::popcount(partial_lanes(bits_[wi])));
         }
     }
 
@@ -565,6 +677,7 @@ private:
     std::size_t n_inside_ = 0, n_partial_ = 0;
     std::vector<std::uint32_t> partial_rank_;              // partial voxels before each word of bits_
     std::vector<std::array<std::uint64_t, 2>> sub_bits_;  // 4^3 sub-voxel classes of every partial voxel, 2 bits each, grid order
+    PartialVoxelSurface surface_;                          // partial voxels' triangles (shapes whose classify_grid gives them)
 };
 
 /// The whole space (an infinite aggregate: Meng15's free-flight and detector-sphere experiments,

@@ -542,6 +542,49 @@ public:
         auto cell = static_cast<std::size_t>((j[2] * m_ + j[1]) * m_ + j[0]);
         double t_cell = t_min;
         while (t_cell <= t_end) {
+            if (!searched && n_cand == 0) {
+                // A rejected tile with nothing pending: none of its cells is scanned, so the walk
+                // jumps to the cell where the ray leaves it instead of stepping through its cells.
+                // The exit is computed with next_crossing on the tile's last cell per axis (the
+                // times the cell-by-cell walk would reach), the other axes' cells from the exit
+                // point, corrected so that each cell's crossings bracket the exit time.
+                int ax = -1;
+                double tx = std::numeric_limits<double>::infinity();
+                for (int a = 0; a < 3; ++a) {
+                    if (step[a] == 0) continue;
+                    const double ta = next_crossing(tile[a] * m_ + (step[a] > 0 ? m_ - 1 : 0), step[a], o[a], d[a]);
+                    if (ta < tx) {
+                        tx = ta;
+                        ax = a;
+                    }
+                }
+                if (ax < 0 || !(tx <= t_end)) break;  // the ray ends in this tile: nothing to report
+                for (int a = 0; a < 3; ++a) {
+                    if (step[a] == 0) continue;
+                    std::int64_t ra;
+                    if (a == ax) {
+                        ra = step[a] > 0 ? (tile[a] + 1) * m_ : tile[a] * m_ - 1;
+                    } else {
+                        ra = detail::floor_i64((o[a] + tx * d[a]) / h_);
+                        ra = step[a] > 0 ? std::max(ra, r[a]) : std::min(ra, r[a]);  // never backwards
+                        for (int k = 0; k < 4 && next_crossing(ra, step[a], o[a], d[a]) <= tx; ++k) ra += step[a];
+                        for (int k = 0; k < 4 && ra != r[a] && next_crossing(ra - step[a], step[a], o[a], d[a]) > tx; ++k)
+                            ra -= step[a];
+                    }
+                    r[a] = ra;
+                    t_next[a] = next_crossing(ra, step[a], o[a], d[a]);
+                    const std::int64_t ta = detail::floor_div(ra, m_);
+                    j[a] = ra - ta * m_;
+                    if (ta != tile[a]) {
+                        tile[a] = ta;
+                        set_base(a);
+                    }
+                }
+                cell = static_cast<std::size_t>((j[2] * m_ + j[1]) * m_ + j[0]);
+                t_cell = tx;
+                searched = tile_filter(Vec3i64(frame.x + tile[0], frame.y + tile[1], frame.z + tile[2]));
+                continue;
+            }
             const int axis = (t_next[0] < t_next[1]) ? (t_next[0] < t_next[2] ? 0 : 2) : (t_next[1] < t_next[2] ? 1 : 2);
             const double t_exit_cell = t_next[axis];
             if (searched) scan(cell, t_cell);

@@ -134,7 +134,7 @@ public:
     [[nodiscard]] std::size_t memory_bytes() const noexcept {
         const auto m = std::size_t(tile().grid_resolution());
         std::size_t b = tile().size() * sizeof(Vec3d) * 2 + m * m * m * sizeof(std::uint32_t) + tile().size() * 27 * (32 + 12);  // cell entries + their float SoA copy
-        b += boundary().memory_bytes();
+        b += boundary().memory_bytes() + packing_.reach_bytes();
         if constexpr (requires { boundary().refinement_bytes(); }) b += boundary().refinement_bytes();
         if constexpr (requires { boundary().shape().memory_bytes(); }) b += boundary().shape().memory_bytes();
         for (const auto& e : exemplars_) b += e.memory_bytes();

@@ -148,7 +148,9 @@ public:
           boundary_(std::move(boundary)),
           weights_(std::move(mixing_weights)),
           mix_(std::span<const double>(weights_)),
-          seed_(seed) {}
+          seed_(seed) {
+        build_reach();
+    }
 
     /// The periodic tile of bounding spheres.
     [[nodiscard]] const PeriodicTile& tile() const noexcept { return tile_; }
@@ -158,6 +160,12 @@ public:
     [[nodiscard]] std::size_t exemplar_count() const noexcept { return weights_.size(); }
     /// Seed of the per-grain hash.
     [[nodiscard]] std::uint64_t seed() const noexcept { return seed_; }
+    /// Can a grain of the aggregate overlap tile `v` (absolute index)? True unless the tile and
+    /// its 26 neighbours are all outside (a grain reaches at most R < L / 2 beyond its centre's
+    /// tile); the traversal does not search the tiles where this is false.
+    [[nodiscard]] bool tile_reachable(const Vec3i64& v) const noexcept { return needs_processing(v); }
+    /// Bytes of the reach grid (one bit per tile of the classifier's range; 0 without one).
+    [[nodiscard]] std::size_t reach_bytes() const noexcept { return reach_.size() * sizeof(std::uint64_t); }
 
     /// Is the grain (sphere, home tile) part of the aggregate (its centre inside the boundary)?
     [[nodiscard]] bool contains(std::uint32_t sphere, const Vec3i64& tile) const noexcept {
@@ -282,8 +290,18 @@ public:
     }
 
 private:
-    /// A voxel is traversed unless it and its 26 neighbours are outside.
+    /// A voxel is traversed unless it and its 26 neighbours are outside: one bit of the
+    /// precomputed reach grid when the classifier has a finite tile range, else 27 lookups.
     [[nodiscard]] bool needs_processing(const Vec3i64& v) const noexcept {
+        if (!reach_.empty()) {
+            std::int64_t q[3];
+            for (int a = 0; a < 3; ++a) {
+                q[a] = v[a] - reach_lo_[a];
+                if (q[a] < 0 || q[a] >= reach_dims_[a]) return false;
+            }
+            const auto i = std::size_t((q[2] * reach_dims_[1] + q[1]) * reach_dims_[0] + q[0]);
+            return (reach_[i >> 6] >> (i & 63)) & 1u;
+        }
         using C = decltype(boundary_.classify(v));
         if (!(boundary_.classify(v) == C::outside)) return true;
         for (int dz = -1; dz <= 1; ++dz)
@@ -293,11 +311,60 @@ private:
         return false;
     }
 
+    /// The reach grid: one bit per tile of the classifier's range grown by one tile, set when
+    /// the tile or one of its 26 neighbours is not outside (what needs_processing asks). Built by
+    /// separable dilation (three passes), so it costs a few operations per tile; skipped when the
+    /// classifier has no tile range or the grid would exceed 2^33 tiles (1 GiB of bits).
+    void build_reach() {
+        if constexpr (requires { boundary_.tile_lo(); boundary_.tile_hi(); }) {
+            using C = decltype(boundary_.classify(std::declval<const Vec3i64&>()));
+            const Vec3i64 lo = boundary_.tile_lo(), hi = boundary_.tile_hi();
+            double cells = 1;
+            for (int a = 0; a < 3; ++a) {
+                if (hi[a] < lo[a]) return;
+                reach_lo_[a] = lo[a] - 1;
+                reach_dims_[a] = hi[a] - lo[a] + 3;
+                cells *= double(reach_dims_[a]);
+            }
+            if (cells > double(std::int64_t(1) << 33)) return;
+            const std::int64_t nx = reach_dims_[0], ny = reach_dims_[1], nz = reach_dims_[2];
+            const auto n = std::size_t(cells);
+            auto idx = [&](std::int64_t x, std::int64_t y, std::int64_t z) { return std::size_t((z * ny + y) * nx + x); };
+            std::vector<std::uint8_t> a(n, 0), b(n, 0);
+            for (std::int64_t z = 1; z + 1 < nz; ++z)
+                for (std::int64_t y = 1; y + 1 < ny; ++y)
+                    for (std::int64_t x = 1; x + 1 < nx; ++x)
+                        a[idx(x, y, z)] = !(boundary_.classify(Vec3i64(reach_lo_[0] + x, reach_lo_[1] + y,
+                                                                         reach_lo_[2] + z)) == C::outside);
+            // Dilate by one tile along x, then y, then z (a 3x3x3 box is their product).
+            const std::int64_t stride[3] = {1, nx, nx * ny};
+            const std::int64_t dims[3] = {nx, ny, nz};
+            for (int ax = 0; ax < 3; ++ax) {
+                for (std::int64_t z = 0; z < nz; ++z)
+                    for (std::int64_t y = 0; y < ny; ++y)
+                        for (std::int64_t x = 0; x < nx; ++x) {
+                            const std::int64_t c[3] = {x, y, z};
+                            const std::size_t i = idx(x, y, z);
+                            std::uint8_t v = a[i];
+                            if (c[ax] > 0) v |= a[i - std::size_t(stride[ax])];
+                            if (c[ax] + 1 < dims[ax]) v |= a[i + std::size_t(stride[ax])];
+                            b[i] = v;
+                        }
+                a.swap(b);
+            }
+            reach_.assign((n + 63) / 64, 0);
+            for (std::size_t i = 0; i < n; ++i) reach_[i >> 6] |= std::uint64_t(a[i]) << (i & 63);
+        }
+    }
+
     PeriodicTile tile_;
     Boundary boundary_;
     std::vector<double> weights_;
     DiscreteDistribution<double> mix_;
     std::uint64_t seed_;
+    std::vector<std::uint64_t> reach_;      // see build_reach(); empty: ask the classifier
+    std::int64_t reach_lo_[3] = {0, 0, 0};  // absolute tile of reach bit 0
+    std::int64_t reach_dims_[3] = {0, 0, 0};
 };
 
 }  // namespace grainlight
