@@ -225,7 +225,8 @@ namespace detail {
 
 /// What a shape's classify_grid may also return about the partial voxels (grid order) so that a
 /// point test there needs no global query: the triangles overlapping each partial voxel (CSR:
-/// `tri_ids[tri_start[r] .. tri_start[r + 1])` for the r-th partial voxel) and whether the
+/// entries tri_start[r] up to, not including, tri_start[r + 1] of tri_ids for the r-th partial
+/// voxel) and whether the
 /// voxel's reference point (MeshBoundary::reference_point) is inside. A point of the voxel is
 /// then inside iff the segment from the reference point crosses those triangles an odd number of
 /// times relative to it (the segment lies in the voxel, so no other triangle can cross it).
