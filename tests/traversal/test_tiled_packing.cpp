@@ -253,3 +253,25 @@ TEST_CASE("the reach grid answers what the 27 neighbour classes say", "[tiled]")
         CHECK(reachable < total);
     }
 }
+
+TEST_CASE("bit sets shifted and OR-ed word by word equal the bit-by-bit shift", "[tiled]") {
+    // detail::or_shifted_bits dilates the reach grid; checked against a shift of single bits for
+    // shifts below, at and above a word (0, 1, 63, 64, 65, 128, 200) in both directions.
+    Rng rng = Rng::from_key(31);
+    const std::size_t nbits = 64 * 7;
+    std::vector<std::uint64_t> src(7), dst0(7);
+    for (auto& w : src) w = rng.next_u64() & rng.next_u64();
+    for (auto& w : dst0) w = rng.next_u64() & rng.next_u64() & rng.next_u64();
+    auto bit = [](const std::vector<std::uint64_t>& v, std::size_t i) { return (v[i / 64] >> (i % 64)) & 1u; };
+    for (const std::size_t s : {0u, 1u, 63u, 64u, 65u, 128u, 200u})
+        for (const bool up : {true, false}) {
+            std::vector<std::uint64_t> got = dst0;
+            detail::or_shifted_bits(got, src, s, up);
+            for (std::size_t i = 0; i < nbits; ++i) {
+                std::uint64_t want = bit(dst0, i);
+                if (up && i >= s) want |= bit(src, i - s);
+                if (!up && i + s < nbits) want |= bit(src, i + s);
+                REQUIRE(bit(got, i) == want);
+            }
+        }
+}

@@ -47,6 +47,27 @@
 
 namespace grainlight {
 
+namespace detail {
+/// Bit sets as words (bit i in word i / 64, position i % 64): dst |= src shifted by s bits toward
+/// higher indices (`up`) or lower ones; bits shifted past either end are dropped. dst and src have
+/// the same size. Used to dilate TiledPacking's reach grid.
+inline void or_shifted_bits(std::vector<std::uint64_t>& dst, const std::vector<std::uint64_t>& src, std::size_t s,
+                            bool up) noexcept {
+    const std::size_t q = s / 64, r = s % 64, n = src.size();
+    for (std::size_t i = 0; i < n; ++i) {
+        std::uint64_t v = 0;
+        if (up) {
+            if (i >= q) v = src[i - q] << r;
+            if (r && i >= q + 1) v |= src[i - q - 1] >> (64 - r);
+        } else {
+            if (i + q < n) v = src[i + q] >> r;
+            if (r && i + q + 1 < n) v |= src[i + q + 1] << (64 - r);
+        }
+        dst[i] |= v;
+    }
+}
+}  // namespace detail
+
 /// A classifier of tile-sized voxels against the aggregate boundary (Meng15 Sec. 3.2): absolute
 /// 64-bit tile index -> an enum with members outside / inside / partial; and, for partial voxels,
 /// whether a point given as (tile, offset from the tile corner in world units) is inside.
@@ -312,9 +333,11 @@ private:
     }
 
     /// The reach grid: one bit per tile of the classifier's range grown by one tile, set when
-    /// the tile or one of its 26 neighbours is not outside (what needs_processing asks). Built by
-    /// separable dilation (three passes), so it costs a few operations per tile; skipped when the
-    /// classifier has no tile range or the grid would exceed 2^33 tiles (1 GiB of bits).
+    /// the tile or one of its 26 neighbours is not outside (what needs_processing asks). Built on
+    /// bits by separable dilation (OR with the bit set shifted by one tile along x, then y, then
+    /// z: a 3 x 3 x 3 box is their product), so it costs one classifier call per tile and a few
+    /// word operations; two bit sets during the build (n / 4 bytes). Skipped (the 27 lookups
+    /// remain) when the classifier has no tile range or the grid exceeds 2^32 tiles.
     void build_reach() {
         if constexpr (requires { boundary_.tile_lo(); boundary_.tile_hi(); }) {
             using C = decltype(boundary_.classify(std::declval<const Vec3i64&>()));
@@ -326,37 +349,32 @@ private:
                 reach_dims_[a] = hi[a] - lo[a] + 3;
                 cells *= double(reach_dims_[a]);
             }
-            if (cells > double(std::int64_t(1) << 33)) return;
+            if (cells > double(std::int64_t(1) << 32)) return;
             const std::int64_t nx = reach_dims_[0], ny = reach_dims_[1], nz = reach_dims_[2];
             const auto n = std::size_t(cells);
-            auto idx = [&](std::int64_t x, std::int64_t y, std::int64_t z) { return std::size_t((z * ny + y) * nx + x); };
-            std::vector<std::uint8_t> a(n, 0), b(n, 0);
-            for (std::int64_t z = 1; z + 1 < nz; ++z)
-                for (std::int64_t y = 1; y + 1 < ny; ++y)
-                    for (std::int64_t x = 1; x + 1 < nx; ++x)
-                        a[idx(x, y, z)] = !(boundary_.classify(Vec3i64(reach_lo_[0] + x, reach_lo_[1] + y,
-                                                                         reach_lo_[2] + z)) == C::outside);
-            // Dilate by one tile along x, then y, then z (a 3x3x3 box is their product).
-            const std::int64_t stride[3] = {1, nx, nx * ny};
-            const std::int64_t dims[3] = {nx, ny, nz};
-            for (int ax = 0; ax < 3; ++ax) {
-                for (std::int64_t z = 0; z < nz; ++z)
-                    for (std::int64_t y = 0; y < ny; ++y)
-                        for (std::int64_t x = 0; x < nx; ++x) {
-                            const std::int64_t c[3] = {x, y, z};
-                            const std::size_t i = idx(x, y, z);
-                            std::uint8_t v = a[i];
-                            if (c[ax] > 0) v |= a[i - std::size_t(stride[ax])];
-                            if (c[ax] + 1 < dims[ax]) v |= a[i + std::size_t(stride[ax])];
-                            b[i] = v;
-                        }
+            const std::size_t words = (n + 63) / 64;
+            std::vector<std::uint64_t> a(words, 0), b;
+            // The margin tiles (first and last along each axis) stay clear here, so the shifts
+            // below never carry a bit from the end of one row (or slice) into the next.
+            std::size_t i = 0;
+            for (std::int64_t z = 0; z < nz; ++z)
+                for (std::int64_t y = 0; y < ny; ++y)
+                    for (std::int64_t x = 0; x < nx; ++x, ++i) {
+                        if (x == 0 || y == 0 || z == 0 || x + 1 == nx || y + 1 == ny || z + 1 == nz) continue;
+                        if (!(boundary_.classify(Vec3i64(reach_lo_[0] + x, reach_lo_[1] + y, reach_lo_[2] + z)) ==
+                              C::outside))
+                            a[i >> 6] |= std::uint64_t(1) << (i & 63);
+                    }
+            for (const std::int64_t stride : {std::int64_t(1), nx, nx * ny}) {
+                b = a;
+                detail::or_shifted_bits(b, a, std::size_t(stride), true);
+                detail::or_shifted_bits(b, a, std::size_t(stride), false);
                 a.swap(b);
             }
-            reach_.assign((n + 63) / 64, 0);
-            for (std::size_t i = 0; i < n; ++i) reach_[i >> 6] |= std::uint64_t(a[i]) << (i & 63);
+            if (n % 64) a.back() &= (std::uint64_t(1) << (n % 64)) - 1;  // no bits past the grid
+            reach_ = std::move(a);
         }
     }
-
     PeriodicTile tile_;
     Boundary boundary_;
     std::vector<double> weights_;
