@@ -351,14 +351,15 @@ public:
             const int u = (ax + 1) % 3, v = (ax + 2) % 3;
             for (std::int64_t jv = 0; jv < dims[v]; ++jv)
                 for (std::int64_t ju = 0; ju < dims[u]; ++ju) {
-                    Vec3d p(0.0), d(0.0);
-                    d[ax] = 1.0;
-                    p[ax] = bounds_.lo[ax] - side;  // start outside the mesh
+                    std::array<std::int64_t, 3> c{};
+                    c[u] = ju;
+                    c[v] = jv;
                     // Rows through a generic point of each voxel (not its centre): non-partial
                     // voxels are homogeneous, and off-centre rows avoid the symmetry planes of
                     // modelled meshes.
-                    p[u] = origin[u] + (double(ju) + 0.5 + 0.0173 * (ax + 1)) * side;
-                    p[v] = origin[v] + (double(jv) + 0.5 - 0.0291 * (ax + 1)) * side;
+                    Vec3d p = sweep_point(origin, side, ax, c), d(0.0);
+                    d[ax] = 1.0;
+                    p[ax] = bounds_.lo[ax] - side;  // start outside the mesh
                     hits.clear();
                     double t = 0;
                     for (int guard = 0; guard < 1 << 20; ++guard) {
@@ -369,15 +370,10 @@ public:
                     }
                     std::size_t next = 0;
                     for (std::int64_t i = 0; i < dims[ax]; ++i) {
-                        const double x = origin[ax] + (double(i) + 0.5 + 0.0113 * (ax + 1)) * side;
+                        c[ax] = i;
+                        const double x = sweep_point(origin, side, ax, c)[ax];
                         while (next < hits.size() && hits[next] < x) ++next;
-                        if (next & 1) {
-                            std::array<std::int64_t, 3> c{};
-                            c[ax] = i;
-                            c[u] = ju;
-                            c[v] = jv;
-                            votes[index(c[0], c[1], c[2])] |= std::uint8_t(1u << ax);  // sweep ax says inside
-                        }
+                        if (next & 1) votes[index(c[0], c[1], c[2])] |= std::uint8_t(1u << ax);  // sweep ax says inside
                     }
                 }
         }
@@ -397,31 +393,34 @@ public:
             for (; q < overlaps.size() && overlaps[q].first <= i; ++q)
                 if (overlaps[q].first == i) surface->tri_ids.push_back(overlaps[q].second);
             surface->tri_start.push_back(std::uint32_t(surface->tri_ids.size()));
-            const std::int64_t x = std::int64_t(i) % dims[0], y = (std::int64_t(i) / dims[0]) % dims[1],
-                               z = std::int64_t(i) / (dims[0] * dims[1]);
-            const Vec3d ref = reference_point(origin, side, x, y, z);
+            const std::array<std::int64_t, 3> c{std::int64_t(i) % dims[0], (std::int64_t(i) / dims[0]) % dims[1],
+                                                std::int64_t(i) / (dims[0] * dims[1])};
+            const Vec3d ref = reference_point(origin, side, c[0], c[1], c[2]);
             const std::uint32_t* ids = surface->tri_ids.data() + first;
             const std::size_t m = surface->tri_ids.size() - first;
             int says_inside = 0;
-            for (int ax = 0; ax < 3; ++ax) {  // sweep ax's point, carried to the reference point
-                const int u = (ax + 1) % 3, v = (ax + 2) % 3;
-                const std::int64_t c[3] = {x, y, z};
-                Vec3d p(0.0);
-                p[ax] = origin[ax] + (double(c[ax]) + 0.5 + 0.0113 * (ax + 1)) * side;
-                p[u] = origin[u] + (double(c[u]) + 0.5 + 0.0173 * (ax + 1)) * side;
-                p[v] = origin[v] + (double(c[v]) + 0.5 - 0.0291 * (ax + 1)) * side;
-                says_inside += inside_local(p, (votes[i] >> ax) & 1u, ref, ids, m);
-            }
+            for (int ax = 0; ax < 3; ++ax)  // sweep ax's point, carried to the reference point
+                says_inside += inside_local(sweep_point(origin, side, ax, c), (votes[i] >> ax) & 1u, ref, ids, m);
             surface->ref_inside.push_back(std::uint8_t(says_inside >= 2));
         }
     }
 
+    /// The point of voxel c (grid at `origin`, voxels of side `side`) that classify_grid's parity
+    /// sweep along axis `ax` classifies: off-centre by offsets that differ per axis and sweep.
+    [[nodiscard]] static Vec3d sweep_point(const Vec3d& origin, double side, int ax,
+                                           const std::array<std::int64_t, 3>& c) noexcept {
+        const int u = (ax + 1) % 3, v = (ax + 2) % 3;
+        Vec3d p(0.0);
+        p[ax] = origin[ax] + (double(c[std::size_t(ax)]) + 0.5 + 0.0113 * (ax + 1)) * side;
+        p[u] = origin[u] + (double(c[std::size_t(u)]) + 0.5 + 0.0173 * (ax + 1)) * side;
+        p[v] = origin[v] + (double(c[std::size_t(v)]) + 0.5 - 0.0291 * (ax + 1)) * side;
+        return p;
+    }
     /// The reference point of voxel (i, j, k) of a grid at `origin` with voxels of side `side`:
-    /// the point of the voxel that classify_grid's sweep along x classifies (off-centre).
+    /// the point of the voxel that classify_grid's sweep along x classifies (sweep_point, ax = 0).
     [[nodiscard]] static Vec3d reference_point(const Vec3d& origin, double side, std::int64_t i, std::int64_t j,
                                                std::int64_t k) noexcept {
-        return Vec3d(origin[0] + (double(i) + 0.5 + 0.0113) * side, origin[1] + (double(j) + 0.5 + 0.0173) * side,
-                     origin[2] + (double(k) + 0.5 - 0.0291) * side);
+        return sweep_point(origin, side, 0, {i, j, k});
     }
     /// Is p inside, given a point `ref` whose side is known (`ref_inside`) and the triangles
     /// `ids[0..m)` that contain every surface crossing of the segment ref -> p (e.g. both points
