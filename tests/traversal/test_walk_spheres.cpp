@@ -7,6 +7,7 @@
 // midpoint lies in an accepted tile.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -38,6 +39,34 @@ std::vector<TileHit> by_first_hit(const PeriodicTile& tile, const Vec3i64& ot, c
 
 bool same(const TileHit& a, const TileHit& b) {
     return a.sphere == b.sphere && a.tile == b.tile && a.t_enter == b.t_enter && a.t_exit == b.t_exit;
+}
+
+// What a tile filter may do to the spheres of a walk: `got` (the filtered walk) is a subsequence
+// of `all` (repeated first_hit, unfiltered), and every sphere of `all` whose chord midpoint within
+// [0, t_max] lies clearly inside a tile the filter accepts is in `got`.
+template <class Accepted>
+void check_filtered(const std::vector<TileHit>& all, const std::vector<TileHit>& got, const Vec3i64& ot,
+                    const Vec3d& o, const Vec3d& d, double t_max, double L, Accepted&& accepted) {
+    std::size_t j = 0;
+    for (const TileHit& h : got) {
+        while (j < all.size() && !same(all[j], h)) ++j;
+        REQUIRE(j < all.size());
+        ++j;
+    }
+    for (const TileHit& h : all) {
+        const Vec3d p = o + 0.5 * (std::max(h.t_enter, 0.0) + std::min(h.t_exit, t_max)) * d;
+        Vec3i64 t = ot;
+        bool near_face = false;
+        for (int a = 0; a < 3; ++a) {
+            const double q = p[a] / L;
+            t[a] += static_cast<std::int64_t>(std::floor(q));
+            near_face |= std::abs(q - std::round(q)) < 1e-9;
+        }
+        if (near_face || !accepted(t)) continue;
+        bool found = false;
+        for (const TileHit& g : got) found |= same(g, h);
+        CHECK(found);
+    }
 }
 
 }  // namespace
@@ -109,28 +138,7 @@ TEST_CASE("walk_spheres with a tile filter only drops spheres of rejected tiles"
                 got.push_back(h);
                 return false;
             });
-        // Subsequence of the unfiltered list, same order.
-        std::size_t j = 0;
-        for (const TileHit& h : got) {
-            while (j < all.size() && !same(all[j], h)) ++j;
-            REQUIRE(j < all.size());
-            ++j;
-        }
-        // Every sphere whose chord midpoint is (clearly) inside an accepted tile is reported.
-        for (const TileHit& h : all) {
-            const Vec3d p = o + 0.5 * (std::max(h.t_enter, 0.0) + std::min(h.t_exit, 8.0)) * d;  // chord within [0, t_max]
-            Vec3i64 t = ot;
-            bool near_face = false;
-            for (int a = 0; a < 3; ++a) {
-                const double q = p[a] / L;
-                t[a] += static_cast<std::int64_t>(std::floor(q));
-                near_face |= std::abs(q - std::round(q)) < 1e-9;
-            }
-            if (near_face || !accepted(t)) continue;
-            bool found = false;
-            for (const TileHit& g : got) found |= same(g, h);
-            CHECK(found);
-        }
+        check_filtered(all, got, ot, o, d, 8.0, L, accepted);
         kept += got.size();
         dropped += all.size() - got.size();
     }
@@ -204,26 +212,7 @@ TEST_CASE("walk_spheres jumps over rejected tiles: every tile the ray crosses is
         }
         // The spheres are those of repeated first_hit whose chord meets an accepted tile.
         const std::vector<TileHit> all = by_first_hit(tile, ot, o, d, 0.0, t_max, 4000);
-        std::size_t m = 0;
-        for (const TileHit& h : got) {
-            while (m < all.size() && !same(all[m], h)) ++m;
-            REQUIRE(m < all.size());
-            ++m;
-        }
-        for (const TileHit& h : all) {
-            const Vec3d p = o + 0.5 * (std::max(h.t_enter, 0.0) + std::min(h.t_exit, t_max)) * d;
-            Vec3i64 t = ot;
-            bool near_face = false;
-            for (int a = 0; a < 3; ++a) {
-                const double q = p[a] / L;
-                t[a] += static_cast<std::int64_t>(std::floor(q));
-                near_face |= std::abs(q - std::round(q)) < 1e-9;
-            }
-            if (near_face || !accepted(t)) continue;
-            bool found = false;
-            for (const TileHit& g : got) found |= same(g, h);
-            CHECK(found);
-        }
+        check_filtered(all, got, ot, o, d, t_max, L, accepted);
         offered_total += offered.size();
         for (const Vec3i64& t : offered) rejected_total += !accepted(t);
     }
