@@ -415,6 +415,22 @@ struct BatchMean {
     return r;
 }
 
+/// Sample s of pixel p = (x, y) in channel ch of a per-channel grey reference: the random stream
+/// keyed (seed, p, 3 s + ch) and the camera ray through the pixel jittered from it. Every VPT
+/// reference of the Wang18 examples walks from here, so one key gives the same paths in all.
+struct ChannelSample {
+    gl::Rng rng;
+    gl::Ray<float> ray;
+};
+template <class Camera>
+[[nodiscard]] inline ChannelSample channel_sample(const Camera& camera, int x, int y, std::uint64_t seed, std::size_t p,
+                                                  int s, int ch) {
+    ChannelSample c{gl::Rng::from_key(seed, p, std::uint64_t(s) * 3 + std::uint64_t(ch)), {}};
+    const gl::Vec2f u = c.rng.uniform2<float>();
+    c.ray = camera.generate_ray(float(x) + u.x, float(y) + u.y);
+    return c;
+}
+
 /// The reference's walks (one grey walk per channel, `scenes[ch]`, components split by SplitVpt)
 /// through batched_films (stem = label); v.W, v.H, v.spp and v.bs sized by the caller.
 template <class Camera>
@@ -423,11 +439,10 @@ inline void vpt_batches(const gl_examples::Example& ex, const std::string& label
                         const gl::WalkOptions<float>& wo, VptRun& v) {
     batched_films<kComp>(ex, label, label, W, H, spp, v.bs, [&](int x, int y, std::size_t p, int s, double (&L)[kComp][3]) {
         for (int ch = 0; ch < 3; ++ch) {
-            gl::Rng rng = gl::Rng::from_key(seed, p, std::uint64_t(s) * 3 + std::uint64_t(ch));
-            const gl::Vec2f u = rng.uniform2<float>();
+            ChannelSample cs = channel_sample(camera, x, y, seed, p, s, ch);
             SplitVpt cb{scenes[std::size_t(ch)]};
-            auto st = gl::start_path<float, Grey>(camera.generate_ray(float(x) + u.x, float(y) + u.y), -1);
-            (void)gl::walk(scenes[std::size_t(ch)], st, rng, cb, wo);
+            auto st = gl::start_path<float, Grey>(cs.ray, -1);
+            (void)gl::walk(scenes[std::size_t(ch)], st, cs.rng, cb, wo);
             double tot = 0;
             for (int k = 0; k < 4; ++k) {
                 L[k][ch] = cb.L[std::size_t(k)];

@@ -133,11 +133,10 @@ ShellRun render_shells(const gl_examples::Example& ex, const wang18::BumpyScene&
                     for (int s = b; s < spp; s += B) {
                         float L[3] = {0, 0, 0};
                         for (int ch = 0; ch < 3; ++ch) {
-                            gl::Rng rng = gl::Rng::from_key(seed ^ 0x5E11u, p, std::uint64_t(s) * 3 + std::uint64_t(ch));
-                            const gl::Vec2f u = rng.uniform2<float>();
+                            wang18::ChannelSample cs = wang18::channel_sample(sc.camera, x, y, seed ^ 0x5E11u, p, s, ch);
                             ShellCb cb{scenes[std::size_t(ch)]};
-                            auto st = gl::start_path<float, wang18::Grey>(sc.camera.generate_ray(float(x) + u.x, float(y) + u.y), -1);
-                            (void)gl::walk(scenes[std::size_t(ch)], st, rng, cb, gl::WalkOptions<float>{});
+                            auto st = gl::start_path<float, wang18::Grey>(cs.ray, -1);
+                            (void)gl::walk(scenes[std::size_t(ch)], st, cs.rng, cb, gl::WalkOptions<float>{});
                             L[ch] = cb.L;
                         }
                         film[0].add_rgb(x, y, L[0], L[1], L[2]);

@@ -203,14 +203,12 @@ int main(int argc, char** argv) {
             wang18::batched_films<kFilms>(
                 ex, "VPT reference", "vpt", W, H, vpt_spp, bs, [&](int x, int y, std::size_t p, int s, double (&v)[kFilms][3]) {
                     for (int ch = 0; ch < 3; ++ch) {
-                        gl::Rng rng = gl::Rng::from_key(seed, p, std::uint64_t(s) * 3 + std::uint64_t(ch));
-                        const gl::Vec2f u = rng.uniform2<float>();
-                        const gl::Ray<float> ray = sc.camera.generate_ray(float(x) + u.x, float(y) + u.y);
+                        wang18::ChannelSample cs = wang18::channel_sample(sc.camera, x, y, seed, p, s, ch);
                         const auto& scene = scenes[std::size_t(ch)];
-                        const bool direct = scene.intersect(ray).shape == vpt_object[std::size_t(ch)];
+                        const bool direct = scene.intersect(cs.ray).shape == vpt_object[std::size_t(ch)];
                         RoomVpt cb{scene, vpt_object[std::size_t(ch)]};
-                        auto st = gl::start_path<float, wang18::Grey>(ray, -1);
-                        (void)gl::walk(scene, st, rng, cb, gl::WalkOptions<float>{});
+                        auto st = gl::start_path<float, wang18::Grey>(cs.ray, -1);
+                        (void)gl::walk(scene, st, cs.rng, cb, gl::WalkOptions<float>{});
                         v[kAll][ch] = cb.all;
                         if (cb.room_after_scatter)
                             v[kObjLitByRoom][ch] = cb.object;

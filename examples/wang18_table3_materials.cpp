@@ -362,11 +362,10 @@ Result run_material(const gl_examples::Example& ex, const Material& mat, const S
                     for (int s = 0; s < st.vpt_spp; ++s) {
                         double L[3] = {0, 0, 0}, count = 0;
                         for (int ch = 0; ch < 3; ++ch) {
-                            gl::Rng rng = gl::Rng::from_key(seed, p, std::uint64_t(s) * 3 + std::uint64_t(ch));
-                            const gl::Vec2f u = rng.uniform2<float>();
+                            wang18::ChannelSample cs = wang18::channel_sample(camera, x, y, seed, p, s, ch);
                             ScatteredOnly cb{scenes[std::size_t(ch)]};
-                            auto ps = gl::start_path<float, Grey>(camera.generate_ray(float(x) + u.x, float(y) + u.y), -1);
-                            (void)gl::walk(scenes[std::size_t(ch)], ps, rng, cb, wo);
+                            auto ps = gl::start_path<float, Grey>(cs.ray, -1);
+                            (void)gl::walk(scenes[std::size_t(ch)], ps, cs.rng, cb, wo);
                             L[ch] = cb.L;
                             count += cb.count;
                         }
