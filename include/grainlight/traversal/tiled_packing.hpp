@@ -183,8 +183,27 @@ public:
     [[nodiscard]] std::uint64_t seed() const noexcept { return seed_; }
     /// Can a grain of the aggregate overlap tile `v` (absolute index)? True unless the tile and
     /// its 26 neighbours are all outside (a grain reaches at most R < L / 2 beyond its centre's
-    /// tile); the traversal does not search the tiles where this is false.
-    [[nodiscard]] bool tile_reachable(const Vec3i64& v) const noexcept { return needs_processing(v); }
+    /// tile); the traversal does not search the tiles where this is false. One bit of the
+    /// precomputed reach grid when the classifier has a finite tile range, else 27 lookups.
+    [[nodiscard]] bool tile_reachable(const Vec3i64& v) const noexcept {
+        if (!reach_.empty()) {
+            std::int64_t q[3];
+            for (int a = 0; a < 3; ++a) {
+                q[a] = v[a] - reach_lo_[a];
+                if (q[a] < 0 || q[a] >= reach_dims_[a]) return false;
+            }
+            const auto i = std::size_t((q[2] * reach_dims_[1] + q[1]) * reach_dims_[0] + q[0]);
+            return (reach_[i >> 6] >> (i & 63)) & 1u;
+        }
+        using C = decltype(boundary_.classify(v));
+        if (!(boundary_.classify(v) == C::outside)) return true;
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx)
+                    if (!(boundary_.classify(Vec3i64(v.x + dx, v.y + dy, v.z + dz)) == C::outside)) return true;
+        return false;
+    }
+
     /// Bytes of the reach grid (one bit per tile of the classifier's range; 0 without one).
     [[nodiscard]] std::size_t reach_bytes() const noexcept { return reach_.size() * sizeof(std::uint64_t); }
 
@@ -270,7 +289,7 @@ public:
             origin_tile, local_origin, d, t_min, t_max,
             [&](const Vec3i64& v) {
                 if (stats) ++stats->voxels_visited;
-                const bool keep = needs_processing(v);
+                const bool keep = tile_reachable(v);
                 if (stats && !keep) ++stats->voxels_skipped;
                 return keep;
             },
@@ -311,29 +330,8 @@ public:
     }
 
 private:
-    /// A voxel is traversed unless it and its 26 neighbours are outside: one bit of the
-    /// precomputed reach grid when the classifier has a finite tile range, else 27 lookups.
-    [[nodiscard]] bool needs_processing(const Vec3i64& v) const noexcept {
-        if (!reach_.empty()) {
-            std::int64_t q[3];
-            for (int a = 0; a < 3; ++a) {
-                q[a] = v[a] - reach_lo_[a];
-                if (q[a] < 0 || q[a] >= reach_dims_[a]) return false;
-            }
-            const auto i = std::size_t((q[2] * reach_dims_[1] + q[1]) * reach_dims_[0] + q[0]);
-            return (reach_[i >> 6] >> (i & 63)) & 1u;
-        }
-        using C = decltype(boundary_.classify(v));
-        if (!(boundary_.classify(v) == C::outside)) return true;
-        for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx)
-                    if (!(boundary_.classify(Vec3i64(v.x + dx, v.y + dy, v.z + dz)) == C::outside)) return true;
-        return false;
-    }
-
     /// The reach grid: one bit per tile of the classifier's range grown by one tile, set when
-    /// the tile or one of its 26 neighbours is not outside (what needs_processing asks). Built on
+    /// the tile or one of its 26 neighbours is not outside (what tile_reachable asks). Built on
     /// bits by separable dilation (OR with the bit set shifted by one tile along x, then y, then
     /// z: a 3 x 3 x 3 box is their product), so it costs one classifier call per tile and a few
     /// word operations; two bit sets during the build (n / 4 bytes). Skipped (the 27 lookups
