@@ -51,8 +51,12 @@
 /// Direction convention (phase/concepts.hpp): phase arguments are propagation directions; d_v is
 /// the direction the light travels, -omega the direction toward the camera.
 ///
-/// Not included (see docs/wang18.md): visibility between samples, environment light on surface
-/// samples, reflections beyond the second between two events. The boundary must be convex (a single refraction in, as in the paper's Sec. 3.3). The Fresnel-reflected light on
+/// Light that reaches the boundary after interactions with the environment (Sec. 3.4.2) enters
+/// as `EnteringLight` records (one light ray each; integrators/point_based_environment.hpp
+/// gathers them with photons).
+///
+/// Not included (see docs/wang18.md): visibility between samples, reflections beyond the second
+/// between two events. The boundary must be convex (a single refraction in, as in the paper's Sec. 3.3). The Fresnel-reflected light on
 /// the outside of the boundary and unscattered light are not part of the result.
 ///
 /// The renderer is deterministic for a seed: light samples come from `rng` at construction,
@@ -139,6 +143,26 @@ struct SurfaceSample {
     Vec3<F> n{F(0), F(0), F(1)};
     /// Boundary area the sample stands for [scene units^2] (> 0; a set of samples should cover the
     /// boundary: areas summing to its area, as sphere_surface_samples gives).
+    F area = F(0);
+};
+
+/// Light that enters the medium through a patch of its boundary, already refracted (Sec. 3.4.2:
+/// light that reached the boundary after interactions with the environment, e.g. reflections on
+/// a glossy or diffuse floor or refractions through an enclosing glass, gathered by photons;
+/// `environment_entering_light` in integrators/point_based_environment.hpp builds these). The
+/// renderer follows one light ray per patch, as for a light surface sample connected to the light.
+template <std::floating_point F, class S>
+struct EnteringLight {
+    /// Point on the boundary where the light enters [scene units].
+    Vec3<F> p{F(0)};
+    /// Unit outward normal of the boundary at p.
+    Vec3<F> n{F(0), F(0), F(1)};
+    /// Unit propagation direction inside the medium (dot(d, n) < 0).
+    Vec3<F> d{F(0), F(0), -F(1)};
+    /// Power transmitted into the medium through the patch (after the boundary's Fresnel) [W].
+    S power{F(0)};
+    /// Area of the patch [scene units^2] (> 0): the light ray's tube has the cross-section
+    /// area |d . n|.
     F area = F(0);
 };
 
@@ -368,6 +392,11 @@ struct PointBasedOptions {
     /// How the bounce samples store the reflected light: `specular` (default) or the paper's
     /// `diffuse` (see BounceReflection).
     BounceReflection bounce_reflection = BounceReflection::specular;
+    /// Connect every light surface sample to the light (Sec. 3.4.1). False: the light surface
+    /// samples gather nothing from the light and only the EnteringLight records passed to the
+    /// constructor light the medium (e.g. photons that include the direct light, for a medium
+    /// behind a glass that a straight connection would ignore).
+    bool direct_light = true;
     int leaf_items = 8;             ///< octree leaf size (paper: 8)
     /// Tree cuts skip the nodes farther from the receiver than the reach of every kernel (not in
     /// the paper; a saving, not an approximation of Eqs. 6-8 beyond this transmittance): the
@@ -454,6 +483,18 @@ public:
                        const std::vector<SurfaceSample<F>>& surface, const Light<F, S>& light,
                        const PointBasedOptions<F>& opt, Rng& rng, const MsTable<N>* ms,
                        const std::vector<SurfaceSample<F>>& bounce_surface)
+        : PointBasedRenderer(medium, eta, boundary, surface, light, opt, rng, ms, bounce_surface, {}) {}
+
+    /// As above, with light that enters the medium after interactions with the environment
+    /// (`entering`, Sec. 3.4.2): each record adds the volume samples of one light ray, beside
+    /// those of the light surface samples (none of these when `opt.direct_light` is false). The
+    /// bounce samples then gather the light of both. Throws invalid_argument if a record has a
+    /// non-positive area, a negative or non-finite power or a direction that does not enter.
+    PointBasedRenderer(const Medium& medium, F eta, const Boundary& boundary,
+                       const std::vector<SurfaceSample<F>>& surface, const Light<F, S>& light,
+                       const PointBasedOptions<F>& opt, Rng& rng, const MsTable<N>* ms,
+                       const std::vector<SurfaceSample<F>>& bounce_surface,
+                       const std::vector<EnteringLight<F, S>>& entering)
         : medium_(medium), eta_(eta), boundary_(boundary), opt_(opt), ms_(ms) {
         check_argument(std::isfinite(eta) && eta > F(0), "PointBasedRenderer", "eta", eta, "(0, inf)");
         for (std::size_t c = 0; c < S::size; ++c)
@@ -493,8 +534,17 @@ public:
         check_argument(opt.bounce_k_max >= 1 && opt.bounce_k_max <= 4096, "PointBasedRenderer", "bounce_k_max",
                        opt.bounce_k_max, "[1, 4096]");
         bounce_fdr_ = fresnel_diffuse_reflectance(eta_);
+        for (const EnteringLight<F, S>& e : entering) {
+            check_argument(std::isfinite(e.area) && e.area > F(0), "PointBasedRenderer", "entering light area", e.area,
+                           "(0, inf)");
+            for (std::size_t c = 0; c < S::size; ++c)
+                check_argument(std::isfinite(e.power[c]) && e.power[c] >= F(0), "PointBasedRenderer",
+                               "entering light power", e.power[c], "[0, inf)");
+            check_argument(glm::dot(e.d, e.n) < F(0), "PointBasedRenderer", "entering light d . n", glm::dot(e.d, e.n),
+                           "(-1, 0) (inward)");
+        }
         set_reach();
-        build_samples(surface, light, rng);
+        build_samples(surface, light, entering, rng);
         if (opt.bounced && opt.bounce_samples > 0) {
             if (bounce_surface.empty())
                 build_bounce_samples(surface, rng);
@@ -845,11 +895,12 @@ private:
         reach_table_ = F(1.001 * std::sqrt(g->rho_max * g->rho_max + zr * zr) / double(smin));
     }
 
-    void build_samples(const std::vector<SurfaceSample<F>>& surface, const Light<F, S>& light, Rng& rng) {
+    void build_samples(const std::vector<SurfaceSample<F>>& surface, const Light<F, S>& light,
+                       const std::vector<EnteringLight<F, S>>& entering, Rng& rng) {
         std::vector<Item> items;
         const int nl = light.is_delta() ? 1 : opt_.light_samples;
-        const F max_len = opt_.max_optical_depth / medium_.sigma_t().min_value();
         for (const SurfaceSample<F>& s : surface) {
+            if (!opt_.direct_light) break;
             for (int j = 0; j < nl; ++j) {
                 const Vec2<F> u2 = rng.uniform2<F>();
                 const Vec2<F> u((F(j) + u2.x) / F(nl), u2.y);  // stratified in one dimension
@@ -864,40 +915,13 @@ private:
                 if (!refract(ls.w, s.n, eta_, wt, &eta_rel)) continue;
                 wt = glm::normalize(wt);
                 const F tr = F(1) - fresnel_dielectric(cos_i, eta_);
-                S phi = ls.L * (cos_i * s.area * tr / (ls.pdf * F(nl)));
-                const F side = std::sqrt(s.area * std::abs(glm::dot(wt, s.n)));
-                Vec3<F> o = offset_ray_origin(s.p, -s.n, wt);
-                Vec3<F> dir = wt;
-                F travelled = F(0);
-                for (int b = 0; b <= opt_.light_bounces; ++b) {
-                    F te;
-                    Vec3<F> ne;
-                    if (!boundary_.intersect(Ray<F>(o, dir), te, ne)) break;
-                    const F len = std::min(te, max_len - travelled);
-                    const Frame<F> fr(dir);
-                    for (F u0 = xi * step_; u0 < len; u0 += step_) {
-                        Item it;
-                        it.p = o + u0 * dir;
-                        it.d = dir;
-                        it.w = phi * medium_.transmittance(u0) * step_;
-                        Box bx{it.p, fr.s, fr.t, dir, F(0.5) * side, F(0.5) * side, F(0.5) * step_,
-                               F(1) / (side * side * step_), s.area};
-                        if (opt_.clip_boxes) bx.inv_volume /= inside_fraction(bx);
-                        const Vec3<F> hext = glm::abs(bx.e1) * bx.h1 + glm::abs(bx.e2) * bx.h2 + glm::abs(bx.d) * bx.hd;
-                        it.extent = Aabb<F>(it.p - hext, it.p + hext);
-                        it.id = std::uint32_t(boxes_.size());
-                        boxes_.push_back(bx);
-                        items.push_back(it);
-                    }
-                    travelled += te;
-                    if (travelled >= max_len) break;
-                    const Vec3<F> pe = o + te * dir;
-                    phi *= medium_.transmittance(te) * fresnel_dielectric(glm::dot(-dir, ne), eta_);
-                    if (phi.max_value() <= F(0)) break;
-                    dir = glm::normalize(dir - F(2) * glm::dot(dir, ne) * ne);
-                    o = offset_ray_origin(pe, -ne, dir);
-                }
+                const S phi = ls.L * (cos_i * s.area * tr / (ls.pdf * F(nl)));
+                add_light_ray(s.p, s.n, wt, phi, s.area, xi, items);
             }
+        }
+        for (const EnteringLight<F, S>& e : entering) {
+            if (e.power.max_value() <= F(0)) continue;
+            add_light_ray(e.p, e.n, glm::normalize(e.d), e.power, e.area, rng.uniform<F>(), items);
         }
         check_argument(items.size() < std::size_t(std::numeric_limits<std::uint32_t>::max()), "PointBasedRenderer",
                        "volume samples", items.size(), "< 2^32");
@@ -915,6 +939,47 @@ private:
                     k_[id] = density_factor(A, boxes_[id].source_area, sigma_bar_);
                 }
             }
+        }
+    }
+
+    /// The volume samples of one light ray that enters at p (outward normal n) along the unit
+    /// inside direction wt with power phi through a patch of area `area`: one every Delta from
+    /// xi Delta on, each with its box (cross-section area |wt . n|), followed through
+    /// `light_bounces` internal reflections (deterministic Fresnel split).
+    void add_light_ray(const Vec3<F>& p, const Vec3<F>& n, const Vec3<F>& wt, S phi, F area, F xi,
+                       std::vector<Item>& items) {
+        const F max_len = opt_.max_optical_depth / medium_.sigma_t().min_value();
+        const F side = std::sqrt(area * std::abs(glm::dot(wt, n)));
+        Vec3<F> o = offset_ray_origin(p, -n, wt);
+        Vec3<F> dir = wt;
+        F travelled = F(0);
+        for (int b = 0; b <= opt_.light_bounces; ++b) {
+            F te;
+            Vec3<F> ne;
+            if (!boundary_.intersect(Ray<F>(o, dir), te, ne)) break;
+            const F len = std::min(te, max_len - travelled);
+            const Frame<F> fr(dir);
+            for (F u0 = xi * step_; u0 < len; u0 += step_) {
+                Item it;
+                it.p = o + u0 * dir;
+                it.d = dir;
+                it.w = phi * medium_.transmittance(u0) * step_;
+                Box bx{it.p, fr.s, fr.t, dir, F(0.5) * side, F(0.5) * side, F(0.5) * step_,
+                       F(1) / (side * side * step_), area};
+                if (opt_.clip_boxes) bx.inv_volume /= inside_fraction(bx);
+                const Vec3<F> hext = glm::abs(bx.e1) * bx.h1 + glm::abs(bx.e2) * bx.h2 + glm::abs(bx.d) * bx.hd;
+                it.extent = Aabb<F>(it.p - hext, it.p + hext);
+                it.id = std::uint32_t(boxes_.size());
+                boxes_.push_back(bx);
+                items.push_back(it);
+            }
+            travelled += te;
+            if (travelled >= max_len) break;
+            const Vec3<F> pe = o + te * dir;
+            phi *= medium_.transmittance(te) * fresnel_dielectric(glm::dot(-dir, ne), eta_);
+            if (phi.max_value() <= F(0)) break;
+            dir = glm::normalize(dir - F(2) * glm::dot(dir, ne) * ne);
+            o = offset_ray_origin(pe, -ne, dir);
         }
     }
 

@@ -12,9 +12,10 @@
 /// after scattering in it, seen directly or through the surroundings. The object is opaque to
 /// shadow rays (it shadows the surroundings; no caustics through it) and adds no emission to
 /// NEE (its light is found by BSDF sampling only, so nothing is counted twice). As in the
-/// renderer, the light reflected by the outside of the boundary and the light that reaches the
-/// medium after a bounce in the surroundings (Sec. 3.4.2's environment on surface samples) are
-/// not part of the result.
+/// renderer, the light reflected by the outside of the boundary is not part of the result. The
+/// light that reaches the medium after a bounce in the surroundings (Sec. 3.4.2) is, when the
+/// renderer was built with the `EnteringLight` records of `environment_entering_light`
+/// (integrators/point_based_environment.hpp) for the same scene.
 ///
 /// `Renderer` needs only `radiance(const Ray<F>&, Rng&) -> Spectrum` (the radiance leaving the
 /// medium toward the ray's origin); any such model of the object's appearance works.
