@@ -25,6 +25,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <initializer_list>
 #include <span>
 #include <string>
 #include <vector>
@@ -394,17 +395,19 @@ inline void batched_films(const gl_examples::Example& ex, const std::string& lab
     }
 }
 
-/// Image mean (over pixels and channels) of film f of a batched reference with `spp` samples per
+/// Image mean (over pixels and channels) of the films `films` (summed) of a batched reference with `spp` samples per
 /// pixel, and its standard error from the spread of the kBatches batch means.
 struct BatchMean {
     double mean = 0, se = 0;
 };
-[[nodiscard]] inline BatchMean batch_mean(const std::vector<double>& bs, int f, std::size_t npx, int spp) {
+[[nodiscard]] inline BatchMean batch_mean(const std::vector<double>& bs, std::initializer_list<int> films, std::size_t npx,
+                                          int spp) {
     const double per_batch = double(spp) / kBatches;
     double bm[kBatches]{};
     for (int b = 0; b < kBatches; ++b) {
         double s = 0;
-        for (std::size_t i = 0; i < npx * 3; ++i) s += bs[batch_index(f, b, npx, 0, 0) + i];
+        for (const int f : films)
+            for (std::size_t i = 0; i < npx * 3; ++i) s += bs[batch_index(f, b, npx, 0, 0) + i];
         bm[b] = s / (per_batch * double(npx * 3));
     }
     BatchMean r;
@@ -413,6 +416,10 @@ struct BatchMean {
     for (double x : bm) var += (x - r.mean) * (x - r.mean) / (kBatches - 1);
     r.se = std::sqrt(var / kBatches);
     return r;
+}
+/// The same for one film.
+[[nodiscard]] inline BatchMean batch_mean(const std::vector<double>& bs, int f, std::size_t npx, int spp) {
+    return batch_mean(bs, {f}, npx, spp);
 }
 
 /// Sample s of pixel p = (x, y) in channel ch of a per-channel grey reference: the random stream
