@@ -351,7 +351,7 @@ int main(int argc, char** argv) {
                                 names[k], "-", ref[std::size_t(k)], ref_se[std::size_t(k)], 100 * interreflected);
                 else if ((k == kObjLitByRoom || k == kObjLitByRoomVia) && !env_on)
                     std::printf("  %-30s %12s %12.5f %10.2e   (%.1f %% of the VPT's object light)\n", names[k], "-",
-                                ref[std::size_t(k)], ref_se[std::size_t(k)], 100 * lit_by_room);
+                                ref[std::size_t(k)], ref_se[std::size_t(k)], obj_all > 0 ? 100 * ref[std::size_t(k)] / obj_all : 0.0);
                 else
                     std::printf("  %-30s %12.5f %12.5f %10.2e %+8.1f%% (+- %.1f%%)\n", names[k], pbm[std::size_t(k)],
                                 ref[std::size_t(k)], ref_se[std::size_t(k)], 100 * rel(k), 100 * rel_se(k));
