@@ -43,12 +43,14 @@
 
 namespace grainlight {
 
-/// Options of `environment_entering_light`.
+/// Options of `trace_environment_photons` (and `environment_entering_light`).
 struct EnvironmentPhotonOptions {
     std::uint64_t photons = 1000000;  ///< photons shot from the scene's lights (>= 1)
     std::uint64_t seed = 1;           ///< random stream (photon i: Rng::from_key(seed, i, 0x454e56))
     int max_depth = 64;               ///< events in the surroundings before a photon is dropped
-    int rr_depth = 3;                 ///< Russian roulette after this many events
+    /// Russian roulette after this many events, on the photon's throughput relative to its
+    /// emitted power (an analog walk through albedos <= 1 is never killed by it).
+    int rr_depth = 3;
     bool include_direct = false;      ///< also keep photons that reach the object straight from a light
 };
 
@@ -191,7 +193,9 @@ template <LitScene Scene>
             const Vec2<F> u_pos = rng.uniform2<F>(), u_dir = rng.uniform2<F>();
             const EmissionSample<F, S> e = scene.sample_emission(u_pick, u_pos, u_dir);
             if (!e) continue;
-            PathState<F, S> st = start_path<F, S>(e.ray, -1, e.weight);
+            // Walk with unit throughput (Russian roulette relative to the emitted power); the
+            // photon's power is its emission weight times the throughput.
+            PathState<F, S> st = start_path<F, S>(e.ray, -1, S(F(1)));
             detail::ObjectArrival<F, S> cb;
             cb.object_shape = object_shape;
             WalkOptions<F> wo;
@@ -200,6 +204,7 @@ template <LitScene Scene>
             wo.mode = TransportMode::importance;
             (void)walk(scene, st, rng, cb, wo);
             if (!cb.arrived || (cb.photon.events == 0 && !opt.include_direct)) continue;
+            cb.photon.power *= e.weight;
             if (!(cb.photon.power.max_value() > F(0))) continue;
             per_block[std::size_t(b)].push_back(cb.photon);
         }
