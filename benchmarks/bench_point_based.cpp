@@ -1,13 +1,17 @@
 // Wang18 point-based rendering: octree build (items/s), Alg. 1 tree cuts (cuts/s, with the cut
 // size as a counter), camera rays through the point-based renderer by component (rays/s), and
-// the multiple-scattering table precomputation (photons/s).
+// the multiple-scattering table precomputation (photons/s), and Sec. 3.4.2's photons: their walk
+// through a room to the object (photons/s) and their assignment to the nearest light surface
+// sample (the grid against a brute-force scan written here as the baseline).
 #include <benchmark/benchmark.h>
 
 #include <vector>
 
 #include "grainlight/integrators/point_based.hpp"
+#include "grainlight/integrators/point_based_environment.hpp"
 #include "grainlight/phase/henyey_greenstein.hpp"
 #include "grainlight/precompute/ms_table.hpp"
+#include "grainlight/scene/scene.hpp"
 
 namespace gl = grainlight;
 
@@ -144,3 +148,54 @@ static void BM_MsTableBuild(benchmark::State& state) {
     state.SetItemsProcessed(std::int64_t(state.iterations()) * state.range(0));
 }
 BENCHMARK(BM_MsTableBuild)->Arg(20000)->Unit(benchmark::kMillisecond);
+
+// Sec. 3.4.2: photons from the quad light walked through a glossy floor and a diffuse wall to the
+// unit sphere (items = photons shot).
+static void BM_EnvironmentPhotons(benchmark::State& state) {
+    gl::Scene<Medium> room;
+    room.add_shape(gl::QuadShape<float>(gl::Vec3f(-7.0f, -1.1f, -7.0f), gl::Vec3f(0, 0, 14), gl::Vec3f(14, 0, 0)),
+                   gl::Material<float, gl::RGB>::glossy(gl::RGB(0.6f), 0.15f));
+    room.add_shape(gl::QuadShape<float>(gl::Vec3f(-7.0f, -1.1f, -2.6f), gl::Vec3f(14, 0, 0), gl::Vec3f(0, 8, 0)),
+                   gl::Material<float, gl::RGB>::diffuse(gl::RGB(0.5f)));
+    const int object = room.add_shape(kSphere, gl::Material<float, gl::RGB>::absorber());
+    room.add_quad_light(kQuad, gl::RGB(1.0f));
+    gl::EnvironmentPhotonOptions o;
+    o.photons = std::uint64_t(state.range(0));
+    for (auto _ : state) {
+        auto ph = gl::trace_environment_photons(room, object, o);
+        benchmark::DoNotOptimize(ph.data());
+        ++o.seed;
+    }
+    state.SetItemsProcessed(std::int64_t(state.iterations()) * state.range(0));
+}
+BENCHMARK(BM_EnvironmentPhotons)->Arg(100000)->Unit(benchmark::kMillisecond);
+
+// Nearest light surface sample of a point near the sphere: the library's grid (Arg 0) against a
+// brute-force scan over all samples (Arg 1, the baseline); 20 000 samples.
+static void BM_NearestSurfaceSample(benchmark::State& state) {
+    const auto surf = gl::sphere_surface_samples(kSphere, 20000);
+    const gl::detail::NearestSample<float> grid(surf);
+    std::vector<gl::Vec3f> q(4096);
+    gl::Rng rng = gl::Rng::from_key(5);
+    for (auto& p : q) p = (1.0f + 0.01f * rng.uniform<float>()) * gl::sample_uniform_sphere(rng.uniform2<float>());
+    std::size_t i = 0;
+    for (auto _ : state) {
+        const gl::Vec3f& p = q[i++ & 4095];
+        std::size_t best = 0;
+        if (state.range(0) == 0) {
+            best = grid.nearest(p);
+        } else {
+            float bd = 1e30f;
+            for (std::size_t j = 0; j < surf.size(); ++j) {
+                const gl::Vec3f d = surf[j].p - p;
+                const float d2 = glm::dot(d, d);
+                if (d2 < bd) {
+                    bd = d2;
+                    best = j;
+                }
+            }
+        }
+        benchmark::DoNotOptimize(best);
+    }
+}
+BENCHMARK(BM_NearestSurfaceSample)->Arg(0)->Arg(1);
