@@ -127,11 +127,11 @@ endif()
 # wang18_surroundings at quick quality (Sec. 3.5.1: the bumpy sphere in a room, seen directly and
 # through the room's glossy floor and diffuse wall, against the VPT of the whole scene; Sec. 3.4.2:
 # the light that enters the object after the room, from photons): the object's light seen
-# directly within 15 % (measured +2.7 +- 1.8 %), through the room within 35 % (measured -14.5 +-
+# directly within 15 % (measured +2.7 +- 1.8 %), through the room within 35 % (measured -14.6 +-
 # 2.3 %: the MS table's +-10 mean free paths miss the far side that the floor reflects), the
 # lit-by-the-room component (point-based from the photons' entering-light records alone vs the
 # reference's paths with a room bounce between the lamp and the medium) seen directly within 25 %
-# (measured -8.2 +- 4.5 %) and in all within 35 % (measured -11.6 +- 2.4 %), its share of the
+# (measured -8.0 +- 4.5 %) and in all within 35 % (measured -11.7 +- 2.4 %), its share of the
 # reference's object light between 3 and 50 % (measured 11.1 %); bad --table-range and
 # --env-rays exit non-zero.
 if(TARGET wang18_surroundings OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/wang18_surroundings.cpp))
