@@ -900,7 +900,7 @@ private:
         std::vector<Item> items;
         const int nl = light.is_delta() ? 1 : opt_.light_samples;
         for (const SurfaceSample<F>& s : surface) {
-            if (!opt_.direct_light) break;
+            if (!opt_.direct_light) break;  // the light surface samples stay dark
             for (int j = 0; j < nl; ++j) {
                 const Vec2<F> u2 = rng.uniform2<F>();
                 const Vec2<F> u((F(j) + u2.x) / F(nl), u2.y);  // stratified in one dimension

@@ -100,15 +100,16 @@ template <std::floating_point F>
 class NearestSample {
 public:
     explicit NearestSample(const std::vector<SurfaceSample<F>>& s) : s_(s) {
-        lo_ = hi_ = s.front().p;
+        lo_ = s.front().p;
+        Vec3<F> hi = lo_;
         double area = 0;
         for (const auto& x : s) {
             lo_ = glm::min(lo_, x.p);
-            hi_ = glm::max(hi_, x.p);
+            hi = glm::max(hi, x.p);
             area += double(x.area);
         }
         const F spacing = F(std::sqrt(area / double(s.size())));
-        const Vec3<F> ext = hi_ - lo_;
+        const Vec3<F> ext = hi - lo_;
         cell_ = std::max(F(2) * spacing, F(1e-6) * std::max({ext.x, ext.y, ext.z, F(1)}));
         for (int a = 0; a < 3; ++a) res_[a] = std::clamp(int(ext[a] / cell_) + 1, 1, 512);
         first_.assign(std::size_t(res_[0]) * std::size_t(res_[1]) * std::size_t(res_[2]) + 1, 0);
@@ -160,7 +161,7 @@ private:
         return (std::size_t(c[2]) * std::size_t(res_[1]) + std::size_t(c[1])) * std::size_t(res_[0]) + std::size_t(c[0]);
     }
     const std::vector<SurfaceSample<F>>& s_;
-    Vec3<F> lo_, hi_;
+    Vec3<F> lo_;
     F cell_ = F(1);
     std::array<int, 3> res_{1, 1, 1};
     std::vector<std::uint32_t> first_, items_;
