@@ -107,6 +107,9 @@ struct Settings {
     float table_range = 10;  ///< table extent in mean free paths (0: automatic)
     bool ms_image = false;   ///< boundary image of the multiple term (PointBasedOptions::ms_boundary_image)
     float ms_image_offset = 0;  ///< its offset in transport mean free paths
+    gl::MsFarField far_field = gl::MsFarField::none;  ///< PointBasedOptions::ms_far_field
+    float diffusion_cell = 0.5f;  ///< its grid cell in mean free paths
+    std::string bounced = "auto";  ///< Eq. 8: on, off, auto (off with the far field)
     int vpt_max_depth = 0;   ///< VPT path cap in events (0: none; the paper's UPBP: 50)
     gl::DepthSampling depth_sampling = gl::DepthSampling::min_extinction;  ///< camera samples of Eq. 10
     std::string table_read = "dense";  ///< the table the renderer reads: dense, merged (5 %), noise
@@ -259,6 +262,10 @@ Result run_material(const gl_examples::Example& ex, const Material& mat, const S
     po.bounce_k_max = 3;
     po.ms_boundary_image = st.ms_image;
     po.ms_image_offset = st.ms_image_offset;
+    po.ms_far_field = st.far_field;
+    po.diffusion_cell = st.diffusion_cell;
+    // The far field's Robin condition carries the boundary's reflection of diffuse light: no Eq. 8.
+    po.bounced = st.bounced != "off";
     c0 = cpu_seconds();
     gl::Rng lrng = gl::Rng::from_key(seed, 0x5742u);
     Renderer pb(medium, eta, sphere, gl::sphere_surface_samples(sphere, st.surface),
@@ -531,6 +538,12 @@ int main(int argc, char** argv) {
             const int photons = ex.opt<int>("table-photons", 200000, 2000000, "particles of each MS table");
             st.ms_image = ex.opt<bool>("ms-image", false, "boundary image of the multiple-scattering term (method of images)");
             st.ms_image_offset = ex.opt<float>("ms-image-offset", 0.0f, "image plane offset in transport mean free paths");
+            const std::string far = ex.opt<std::string>(
+                "ms-far-field", "none",
+                "multiple scattering beyond the table and at the boundary: none (the paper's Eq. 7) or diffusion (the bounded-medium "
+                "diffusion correction on a grid; the bounced term is then off)");
+            st.diffusion_cell = ex.opt<float>("diffusion-cell", 1.0f, "far field grid cell in mean free paths");
+            st.bounced = ex.opt<std::string>("bounced", "auto", "the bounced term (Eq. 8): on, off, auto (on; with the far field it reflects single and double scattering)");
             st.vpt_max_depth = ex.opt<int>("vpt-max-depth", 0, "cap the VPT paths at this many events (0: none; the paper's UPBP reference: 50)");
             st.table_range = ex.opt<float>("table-range", 10.0f, "MS table extent +-range in mean free paths (0: 5 diffusion lengths, at most the sphere)");
             st.table_read = ex.opt<std::string>(
@@ -559,6 +572,13 @@ int main(int argc, char** argv) {
             if (photons < 1000) throw gl_examples::cli_error("--table-photons must be >= 1000");
             if (st.table_read != "dense" && st.table_read != "merged" && st.table_read != "noise")
                 throw gl_examples::cli_error("--table-read must be dense, merged or noise, got '" + st.table_read + "'");
+            if (st.bounced != "on" && st.bounced != "off" && st.bounced != "auto")
+                throw gl_examples::cli_error("--bounced must be on, off or auto, got '" + st.bounced + "'");
+            if (far == "none") st.far_field = gl::MsFarField::none;
+            else if (far == "diffusion") st.far_field = gl::MsFarField::diffusion;
+            else throw gl_examples::cli_error("--ms-far-field must be none or diffusion, got '" + far + "'");
+            if (!(st.diffusion_cell > 0.05f && st.diffusion_cell <= 10))
+                throw gl_examples::cli_error("--diffusion-cell must be in (0.05, 10] mean free paths");
             if (depth == "min") st.depth_sampling = gl::DepthSampling::min_extinction;
             else if (depth == "average") st.depth_sampling = gl::DepthSampling::average_extinction;
             else if (depth == "mixture") st.depth_sampling = gl::DepthSampling::channel_mixture;

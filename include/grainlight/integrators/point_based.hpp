@@ -66,6 +66,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 #include <cstdint>
 #include <limits>
 #include <type_traits>
@@ -83,6 +84,8 @@
 #include "grainlight/integrators/ms_table.hpp"
 #include "grainlight/integrators/ms_table_quadtree.hpp"
 #include "grainlight/media/continuous.hpp"
+#include "grainlight/diffusion/boundary.hpp"
+#include "grainlight/diffusion/grid.hpp"
 #include "grainlight/optics/fresnel.hpp"
 #include "grainlight/phase/concepts.hpp"
 #include "grainlight/phase/henyey_greenstein.hpp"
@@ -328,6 +331,22 @@ private:
     std::array<F, N> norm_{};  ///< 1 - exp(-sigma_t,c d_max) per channel (channel_mixture only)
 };
 
+/// Where the multiple-scattering term comes from beyond the table and near the boundary.
+enum class MsFarField {
+    /// The paper's Eq. 7 as is: the infinite-medium table, zero beyond its grid.
+    none,
+    /// Our addition (not in the paper): the table within its grid; beyond it the infinite-medium
+    /// diffusion Green's function of the same sources; and everywhere the bounded-medium
+    /// correction u = phi_bounded - phi_infinite of diffusion theory, solved once on a grid over
+    /// the boundary (diffusion/grid.hpp, Robin condition with the boundary's A). The light that
+    /// the infinite-medium table counts although it would have left the medium, and the light
+    /// that diffuses farther than the table reaches, are then both accounted for (docs/wang18.md).
+    /// The boundary's reflection of the multiply scattered light is in the Robin condition, so
+    /// the bounced term (Eq. 8) then reflects only the single- and double-scattered light that
+    /// reaches the boundary.
+    diffusion
+};
+
 /// Options of the point-based renderer (defaults follow the paper where it gives values).
 template <std::floating_point F>
 struct PointBasedOptions {
@@ -369,6 +388,14 @@ struct PointBasedOptions {
     /// Offset of the mirrored source beyond the tangent plane, in transport mean free paths
     /// 1 / (sigma_t (1 - albedo g)) (used only with ms_boundary_image).
     F ms_image_offset = F(0);
+    /// Far field and boundary of the multiple-scattering term (see MsFarField; needs a table).
+    MsFarField ms_far_field = MsFarField::none;
+    /// Cell side of the far field's diffusion grid, in mean free paths of the mean sigma_t (> 0).
+    F diffusion_cell = F(0.5);
+    /// Opening ratio of the tree walk that sums the sources' infinite-medium field at the grid's
+    /// boundary faces: a node is used whole when its bounds' diagonal is below this times its
+    /// distance (in (0, 2]).
+    F diffusion_opening = F(0.3);
     /// @var single
     /// Compute single scattering (Eq. 5).
     /// @var double_
@@ -534,6 +561,12 @@ public:
         check_argument(opt.bounce_k_max >= 1 && opt.bounce_k_max <= 4096, "PointBasedRenderer", "bounce_k_max",
                        opt.bounce_k_max, "[1, 4096]");
         bounce_fdr_ = fresnel_diffuse_reflectance(eta_);
+        check_argument(std::isfinite(opt.diffusion_cell) && opt.diffusion_cell > F(0), "PointBasedRenderer",
+                       "diffusion_cell", opt.diffusion_cell, "(0, inf) mean free paths");
+        check_argument(opt.diffusion_opening > F(0) && opt.diffusion_opening <= F(2), "PointBasedRenderer",
+                       "diffusion_opening", opt.diffusion_opening, "(0, 2]");
+        check_argument(opt.ms_far_field == MsFarField::none || ms != nullptr, "PointBasedRenderer",
+                       "ms table (for ms_far_field = diffusion)", 0, "a table");
         for (const EnteringLight<F, S>& e : entering) {
             check_argument(std::isfinite(e.area) && e.area > F(0), "PointBasedRenderer", "entering light area", e.area,
                            "(0, inf)");
@@ -551,6 +584,9 @@ public:
             else
                 build_bounce_samples(bounce_surface, rng);
         }
+        // After the bounce samples: the far field's sources are the volume samples and the
+        // secondary samples of the reflected light.
+        if (opt.ms_far_field == MsFarField::diffusion) build_far_field(surface);
     }
 
     /// Octree over the volume light samples (Sec. 4).
@@ -568,7 +604,9 @@ public:
         auto tb = [](const Octree<F, S>& t) {
             return t.items().size() * sizeof(Item) + t.nodes().size() * sizeof(typename Octree<F, S>::Node);
         };
-        return tb(tree_) + tb(surf_tree_) + tb(sec_tree_) + boxes_.size() * sizeof(Box) + k_.size() * sizeof(F);
+        std::size_t far = dgrid_ ? dgrid_->bytes() : 0;
+        for (const auto& f : dfield_) far += f.v.size() * sizeof(F);
+        return tb(tree_) + tb(surf_tree_) + tb(sec_tree_) + boxes_.size() * sizeof(Box) + k_.size() * sizeof(F) + far;
     }
     /// Switch the boundary image of the multiple term (PointBasedOptions::ms_boundary_image) after
     /// construction, for studies that compare both on the same light samples (the bounce samples
@@ -587,6 +625,21 @@ public:
         }
         msq_ = q;
         set_reach();
+    }
+    /// The far field's diffusion grid (PointBasedOptions::ms_far_field), or nullptr.
+    [[nodiscard]] const DiffusionGrid<F>* far_field_grid() const noexcept { return dgrid_ ? &*dgrid_ : nullptr; }
+    /// The far field's bounded-medium correction of the multiple-scattering emission density at
+    /// P toward `to_cam` (per channel; 0 without the far field).
+    [[nodiscard]] S far_field_correction(const Vec3<F>& P, const Vec3<F>& to_cam) const noexcept {
+        S m(F(0));
+        if (!dgrid_) return m;
+        const S sig_s = medium_.sigma_s();
+        for (std::size_t c = 0; c < S::size; ++c) {
+            Vec3<F> gr;
+            const F u = dgrid_->eval(dfield_[c], P, &gr);
+            m[c] = sig_s[c] * inv_four_pi_v<F> * (u - F(3) * far_g_[c] * far_D_[c] * glm::dot(gr, to_cam));
+        }
+        return m;
     }
     /// True if a multiple-scattering table (dense or compressed) is in use.
     [[nodiscard]] bool has_table() const noexcept { return msq_ != nullptr || ms_ != nullptr; }
@@ -682,9 +735,9 @@ public:
                 dbl += sig_s * sig_s * wv * medium_.transmittance(r) * pp * k;
             }
             if (with_table && r <= reach_table_) {  // beyond reach_table_ the table is 0 in every channel
-                S m = table_response(rv, dv, to_cam);
+                S m = dgrid_ ? table_or_far(P, xv, dv, coherence, to_cam) : table_response(rv, dv, to_cam);
                 if constexpr (TangentPlaneBoundary<Boundary, F>) {
-                    if (opt_.ms_boundary_image) {
+                    if (opt_.ms_boundary_image && !dgrid_) {
                         Vec3<F> q, n;
                         boundary_tangent_plane(boundary_, xv, q, n);
                         const F h = std::max(F(0), glm::dot(q - xv, n));  // depth of the source
@@ -754,6 +807,46 @@ public:
         const F rho = glm::length(rv - z * dv);
         const F st = medium_.sigma_t()[c];
         return F(table_eval(c, double(rho * st), double(z * st), dir)) * st * st * st;
+    }
+    /// The far field's infinite-medium diffusion response of channel c (per unit scattered power)
+    /// at P from a source at xv travelling along dv (direction coherence `coh`): the emission
+    /// density sigma_s (phi + 3 g E . to_cam) / (4 pi) of an isotropic point source of power
+    /// alpha (the light after its first collision) at xv + delta coh dv, delta = g / sigma_t'.
+    [[nodiscard]] F far_kernel(std::size_t c, const Vec3<F>& P, const Vec3<F>& xv, const Vec3<F>& dv, F coh,
+                               const Vec3<F>& to_cam) const noexcept {
+        const Vec3<F> rr = P - (xv + (far_delta_[c] * coh) * dv);
+        const F r = std::max(glm::length(rr), far_soft_);
+        const F e = std::exp(-far_kappa_[c] * r);
+        const F a = medium_.albedo()[c] * inv_four_pi_v<F>;
+        const F phi = a * e / (far_D_[c] * r);
+        const F flux = a * e * (F(1) + far_kappa_[c] * r) / (r * r) * glm::dot(rr, to_cam) / r;
+        return medium_.sigma_s()[c] * inv_four_pi_v<F> * (phi + F(3) * far_g_[c] * flux);
+    }
+    /// Multiple-scattering response with the far field on: the table where the channel's (rho, z)
+    /// is on its grid, far_kernel() beyond.
+    [[nodiscard]] S table_or_far(const Vec3<F>& P, const Vec3<F>& xv, const Vec3<F>& dv, F coh,
+                                 const Vec3<F>& to_cam) const noexcept {
+        const Vec3<F> rv = P - xv;
+        const F z = glm::dot(rv, dv);
+        const F rho = glm::length(rv - z * dv);
+        const MsTableGrid& g = msq_ ? msq_->grid() : ms_->grid();
+        std::array<bool, S::size> on{};
+        bool any = false;
+        for (std::size_t c = 0; c < S::size; ++c) {
+            const F st = medium_.sigma_t()[c];
+            const double rr = double(rho * st), zz = double(z * st);
+            on[c] = rr >= 0 && rr <= g.rho_max && zz >= g.z_min && zz <= g.z_max;
+            any = any || on[c];
+        }
+        MsDirection dir;
+        if (any) dir = table_direction(rv, dv, to_cam);
+        S m(F(0));
+        for (std::size_t c = 0; c < S::size; ++c) {
+            const F st = medium_.sigma_t()[c];
+            m[c] = on[c] ? F(table_eval(c, double(rho * st), double(z * st), dir)) * st * st * st
+                         : far_kernel(c, P, xv, dv, coh, to_cam);
+        }
+        return m;
     }
     /// Multiple-scattering table direction bin of the exit direction `to_cam`, in the frame of a source
     /// at offset rv travelling along dv (cos theta about dv, phi from the radial direction folded to
@@ -893,6 +986,81 @@ private:
         }
         const double zr = std::max(std::abs(g->z_min), std::abs(g->z_max));
         reach_table_ = F(1.001 * std::sqrt(g->rho_max * g->rho_max + zr * zr) / double(smin));
+        // With the far field the multiple term reaches every source (the diffusion kernel beyond).
+        if (opt_.ms_far_field == MsFarField::diffusion) reach_table_ = std::numeric_limits<F>::infinity();
+    }
+
+    /// The far field (MsFarField::diffusion): per-channel diffusion parameters, the grid over the
+    /// boundary (the box of the light surface samples), the Robin data g = phi_inf + 2 A D
+    /// dphi_inf/dn of the volume samples and the bounced light's secondary samples at every
+    /// boundary face, and the correction u per channel.
+    void build_far_field(const std::vector<SurfaceSample<F>>& surface) {
+        const S sig_t = medium_.sigma_t(), sig_s = medium_.sigma_s(), gg = medium_.phase().mean_cosine();
+        const F A = boundary_A(eta_);
+        for (std::size_t c = 0; c < S::size; ++c) {
+            const F sa = sig_t[c] - sig_s[c];
+            const F stp = sa + sig_s[c] * (F(1) - gg[c]);  // sigma_t'
+            far_D_[c] = F(1) / (F(3) * stp);
+            far_kappa_[c] = std::sqrt(std::max(F(0), sa) / far_D_[c]);
+            far_delta_[c] = gg[c] / stp;
+            far_g_[c] = gg[c];
+        }
+        Aabb<F> box;
+        for (const SurfaceSample<F>& sp : surface) box.expand(sp.p);
+        const F h = opt_.diffusion_cell / sigma_bar_;
+        far_soft_ = F(0.5) * h;
+        dgrid_.emplace(boundary_, box, h);
+        const auto& faces = dgrid_->faces();
+        std::vector<std::array<F, S::size>> gdata(faces.size());
+        const F theta = opt_.diffusion_opening;
+#if defined(_OPENMP)
+#pragma omp parallel for schedule(dynamic, 64)
+#endif
+        for (std::ptrdiff_t fi = 0; fi < std::ptrdiff_t(faces.size()); ++fi) {
+            const DiffusionGridFace<F>& fc = faces[std::size_t(fi)];
+            std::array<double, S::size> phi{}, dn{};
+            auto add = [&](const Vec3<F>& xv, const Vec3<F>& dv, F coh, const S& w) {
+                for (std::size_t c = 0; c < S::size; ++c) {
+                    const Vec3<F> rr = fc.s - (xv + (far_delta_[c] * coh) * dv);
+                    const F r = std::max(glm::length(rr), far_soft_);
+                    const double q = double(medium_.albedo()[c]) * double(sig_s[c]) * double(w[c]);
+                    const double e = std::exp(-double(far_kappa_[c]) * double(r));
+                    const double a = q / (4.0 * pi_v<double> * double(far_D_[c]));
+                    phi[c] += a * e / double(r);
+                    dn[c] -= a * e * (1.0 + double(far_kappa_[c]) * double(r)) / (double(r) * double(r)) *
+                             double(glm::dot(rr, fc.n)) / double(r);
+                }
+            };
+            for (const Octree<F, S>* tree : {&tree_, &sec_tree_}) {
+                const auto& nodes = tree->nodes();
+                const auto& items = tree->items();
+                if (nodes.empty()) continue;
+                std::array<std::uint32_t, 256> stack;
+                std::size_t top = 0;
+                stack[top++] = 0;
+                while (top > 0) {
+                    const auto& nd = nodes[stack[--top]];
+                    const bool whole = glm::length(nd.bounds.hi - nd.bounds.lo) < theta * glm::length(fc.s - nd.p);
+                    if (whole) {
+                        add(nd.p, nd.d, nd.coherence, nd.w);
+                    } else if (nd.leaf()) {
+                        for (std::uint32_t k = nd.begin; k < nd.end; ++k) add(items[k].p, items[k].d, F(1), items[k].w);
+                    } else {
+                        for (std::uint32_t ch = 0; ch < nd.child_count && top < stack.size(); ++ch)
+                            stack[top++] = nd.first_child + ch;
+                    }
+                }
+            }
+            for (std::size_t c = 0; c < S::size; ++c)
+                gdata[std::size_t(fi)][c] = F(phi[c] + 2.0 * double(A) * double(far_D_[c]) * dn[c]);
+        }
+        for (std::size_t c = 0; c < S::size; ++c) {
+            std::vector<F> g(faces.size());
+            for (std::size_t f = 0; f < faces.size(); ++f) g[f] = gdata[f][c];
+            const F sa = std::max(F(0), sig_t[c] - sig_s[c]);
+            const std::vector<F> u = dgrid_->solve(far_D_[c], sa, A, {}, g, &far_info_[c]);
+            dfield_[c] = dgrid_->field(u, far_D_[c], A, g);
+        }
     }
 
     void build_samples(const std::vector<SurfaceSample<F>>& surface, const Light<F, S>& light,
@@ -1077,8 +1245,12 @@ private:
                 if (!boundary_.intersect(Ray<F>(o, w), te, ne)) continue;
                 PointBasedComponents<S> c;
                 gather_segment(o, w, te, S(F(1)), r, c, opt_.bounce_k_max, primary, bounced);
-                // Light arriving along -w hits the boundary from inside at cosine wl.z.
-                const S reflected = c.total() * fresnel_dielectric(-wl.z, eta_);
+                // Light arriving along -w hits the boundary from inside at cosine wl.z. With the
+                // far field, the reflection of the multiply scattered (diffuse) light is in its
+                // Robin condition: only the single- and double-scattered light is reflected here.
+                const S arriving = opt_.ms_far_field == MsFarField::diffusion ? S(c.single + c.double_ + c.bounced)
+                                                                               : c.total();
+                const S reflected = arriving * fresnel_dielectric(-wl.z, eta_);
                 acc += reflected;
                 if (rays) {
                     BounceRay& b = (*rays)[std::size_t(ii) * std::size_t(nr) + std::size_t(k)];
@@ -1237,6 +1409,7 @@ private:
             S dbl(F(0)), mul(F(0));
             const Vec3<F> Pk = o + dk * w;
             if (prim) gather_point(Pk, w, dbl, mul);
+            if (prim && dgrid_ && opt_.multiple) mul += far_field_correction(Pk, -w);
             dsum += wk * dbl;
             msum += wk * mul;
             if (bounced) {
@@ -1268,6 +1441,12 @@ private:
     F bounce_area_ = F(1);  ///< mean area of a bounce surface sample
     std::vector<Box> boxes_;
     std::vector<F> k_;
+    // Far field (MsFarField::diffusion).
+    std::optional<DiffusionGrid<F>> dgrid_;
+    std::array<typename DiffusionGrid<F>::Field, S::size> dfield_{};
+    std::array<DiffusionSolveInfo, S::size> far_info_{};
+    std::array<F, S::size> far_D_{}, far_kappa_{}, far_delta_{}, far_g_{};
+    F far_soft_ = F(0);
 };
 
 }  // namespace grainlight
