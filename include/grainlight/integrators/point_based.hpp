@@ -395,7 +395,7 @@ struct PointBasedOptions {
     /// Opening ratio of the tree walk that sums the sources' infinite-medium field at the grid's
     /// boundary faces: a node is used whole when its bounds' diagonal is below this times its
     /// distance (in (0, 2]).
-    F diffusion_opening = F(0.3);
+    F diffusion_opening = F(0.5);
     /// @var single
     /// Compute single scattering (Eq. 5).
     /// @var double_
@@ -1004,6 +1004,7 @@ private:
             far_kappa_[c] = std::sqrt(std::max(F(0), sa) / far_D_[c]);
             far_delta_[c] = gg[c] / stp;
             far_g_[c] = gg[c];
+            far_q_[c] = medium_.albedo()[c] * sig_s[c] * inv_four_pi_v<F> / far_D_[c];
         }
         Aabb<F> box;
         for (const SurfaceSample<F>& sp : surface) box.expand(sp.p);
@@ -1023,12 +1024,9 @@ private:
                 for (std::size_t c = 0; c < S::size; ++c) {
                     const Vec3<F> rr = fc.s - (xv + (far_delta_[c] * coh) * dv);
                     const F r = std::max(glm::length(rr), far_soft_);
-                    const double q = double(medium_.albedo()[c]) * double(sig_s[c]) * double(w[c]);
-                    const double e = std::exp(-double(far_kappa_[c]) * double(r));
-                    const double a = q / (4.0 * pi_v<double> * double(far_D_[c]));
-                    phi[c] += a * e / double(r);
-                    dn[c] -= a * e * (1.0 + double(far_kappa_[c]) * double(r)) / (double(r) * double(r)) *
-                             double(glm::dot(rr, fc.n)) / double(r);
+                    const F e = std::exp(-far_kappa_[c] * r) * (far_q_[c] * w[c]) / r;
+                    phi[c] += double(e);
+                    dn[c] -= double(e * (F(1) + far_kappa_[c] * r) * glm::dot(rr, fc.n) / (r * r));
                 }
             };
             for (const Octree<F, S>* tree : {&tree_, &sec_tree_}) {
@@ -1446,6 +1444,7 @@ private:
     std::array<typename DiffusionGrid<F>::Field, S::size> dfield_{};
     std::array<DiffusionSolveInfo, S::size> far_info_{};
     std::array<F, S::size> far_D_{}, far_kappa_{}, far_delta_{}, far_g_{};
+    std::array<F, S::size> far_q_{};  ///< alpha sigma_s / (4 pi D): the Green's function's factor per unit weight
     F far_soft_ = F(0);
 };
 
