@@ -396,6 +396,11 @@ struct PointBasedOptions {
     /// boundary faces: a node is used whole when its bounds' diagonal is below this times its
     /// distance (in (0, 2]).
     F diffusion_opening = F(0.5);
+    /// The escape radius the table was built with (MsTableOptions::escape_radius, mean free
+    /// paths; > 0): its walks drop the particles beyond it, so the table lacks the light that
+    /// would have come back. With the far field, that light is added back on the table's grid as
+    /// the diffusion field of the dropped particles (a perfectly absorbing sphere at this radius).
+    F ms_table_escape_radius = F(24);
     /// @var single
     /// Compute single scattering (Eq. 5).
     /// @var double_
@@ -565,6 +570,8 @@ public:
                        "diffusion_cell", opt.diffusion_cell, "(0, inf) mean free paths");
         check_argument(opt.diffusion_opening > F(0) && opt.diffusion_opening <= F(2), "PointBasedRenderer",
                        "diffusion_opening", opt.diffusion_opening, "(0, 2]");
+        check_argument(std::isfinite(opt.ms_table_escape_radius) && opt.ms_table_escape_radius > F(0),
+                       "PointBasedRenderer", "ms_table_escape_radius", opt.ms_table_escape_radius, "(0, inf) mean free paths");
         check_argument(opt.ms_far_field == MsFarField::none || ms != nullptr, "PointBasedRenderer",
                        "ms table (for ms_far_field = diffusion)", 0, "a table");
         for (const EnteringLight<F, S>& e : entering) {
@@ -605,7 +612,8 @@ public:
             return t.items().size() * sizeof(Item) + t.nodes().size() * sizeof(typename Octree<F, S>::Node);
         };
         std::size_t far = dgrid_ ? dgrid_->bytes() : 0;
-        for (const auto& f : dfield_) far += f.v.size() * sizeof(F);
+        for (const auto& set : dfield_)
+            for (const auto& f : set) far += f.v.size() * sizeof(F);
         return tb(tree_) + tb(surf_tree_) + tb(sec_tree_) + boxes_.size() * sizeof(Box) + k_.size() * sizeof(F) + far;
     }
     /// Switch the boundary image of the multiple term (PointBasedOptions::ms_boundary_image) after
@@ -629,14 +637,15 @@ public:
     /// The far field's diffusion grid (PointBasedOptions::ms_far_field), or nullptr.
     [[nodiscard]] const DiffusionGrid<F>* far_field_grid() const noexcept { return dgrid_ ? &*dgrid_ : nullptr; }
     /// The far field's bounded-medium correction of the multiple-scattering emission density at
-    /// P toward `to_cam` (per channel; 0 without the far field).
-    [[nodiscard]] S far_field_correction(const Vec3<F>& P, const Vec3<F>& to_cam) const noexcept {
+    /// P toward `to_cam` (per channel; 0 without the far field), of the light's volume samples
+    /// (`set` 0, the multiple term) or of the bounced light's secondary samples (1).
+    [[nodiscard]] S far_field_correction(const Vec3<F>& P, const Vec3<F>& to_cam, int set = 0) const noexcept {
         S m(F(0));
-        if (!dgrid_) return m;
+        if (!dgrid_ || dfield_[std::size_t(set & 1)][0].v.empty()) return m;
         const S sig_s = medium_.sigma_s();
         for (std::size_t c = 0; c < S::size; ++c) {
             Vec3<F> gr;
-            const F u = dgrid_->eval(dfield_[c], P, &gr);
+            const F u = dgrid_->eval(dfield_[std::size_t(set & 1)][c], P, &gr);
             m[c] = sig_s[c] * inv_four_pi_v<F> * (u - F(3) * far_g_[c] * far_D_[c] * glm::dot(gr, to_cam));
         }
         return m;
@@ -822,6 +831,22 @@ public:
         const F flux = a * e * (F(1) + far_kappa_[c] * r) / (r * r) * glm::dot(rr, to_cam) / r;
         return medium_.sigma_s()[c] * inv_four_pi_v<F> * (phi + F(3) * far_g_[c] * flux);
     }
+    /// The light the table's walks dropped beyond their escape radius and that would have come
+    /// back to offset rv (emission density per unit scattered power, isotropic; channel c).
+    [[nodiscard]] F table_return(std::size_t c, const Vec3<F>& rv) const noexcept {
+        const double k = double(far_kappa_[c]), Re = double(far_re_[c]), r = double(glm::length(rv));
+        double shape;  // e^{-k Re} sinh(k r) / (r sinh(k Re)), -> 1 / Re as k -> 0
+        if (k * Re < 1e-4) {
+            shape = 1.0 / Re;
+        } else {
+            const double x = k * r;
+            const double sr = x < 1e-6 ? k : std::sinh(x) / r;
+            // e^{-k Re} / sinh(k Re) = 2 / (e^{2 k Re} - 1)
+            shape = sr * 2.0 / std::expm1(2.0 * k * Re);
+        }
+        const double a = double(medium_.albedo()[c]) / (4.0 * pi_v<double> * double(far_D_[c]));
+        return F(double(medium_.sigma_s()[c]) * double(inv_four_pi_v<F>) * a * shape);
+    }
     /// Multiple-scattering response with the far field on: the table where the channel's (rho, z)
     /// is on its grid, far_kernel() beyond.
     [[nodiscard]] S table_or_far(const Vec3<F>& P, const Vec3<F>& xv, const Vec3<F>& dv, F coh,
@@ -843,7 +868,7 @@ public:
         S m(F(0));
         for (std::size_t c = 0; c < S::size; ++c) {
             const F st = medium_.sigma_t()[c];
-            m[c] = on[c] ? F(table_eval(c, double(rho * st), double(z * st), dir)) * st * st * st
+            m[c] = on[c] ? F(table_eval(c, double(rho * st), double(z * st), dir)) * st * st * st + table_return(c, rv)
                          : far_kernel(c, P, xv, dv, coh, to_cam);
         }
         return m;
@@ -1005,6 +1030,9 @@ private:
             far_delta_[c] = gg[c] / stp;
             far_g_[c] = gg[c];
             far_q_[c] = medium_.albedo()[c] * sig_s[c] * inv_four_pi_v<F> / far_D_[c];
+            // The dropped particles' return (MsFarField doc): alpha / (4 pi D) e^{-k Re} sinh(k r)
+            // / (r sinh(k Re)) with Re the escape radius plus the extrapolation length 2 D.
+            far_re_[c] = opt_.ms_table_escape_radius / sig_t[c] + F(2) * far_D_[c];
         }
         Aabb<F> box;
         for (const SurfaceSample<F>& sp : surface) box.expand(sp.p);
@@ -1012,7 +1040,10 @@ private:
         far_soft_ = F(0.5) * h;
         dgrid_.emplace(boundary_, box, h);
         const auto& faces = dgrid_->faces();
-        std::vector<std::array<F, S::size>> gdata(faces.size());
+        // Robin data per face, channel and source set (0: the light's volume samples, 1: the
+        // secondary samples of the bounced light), solved separately so that each correction goes
+        // with its component.
+        std::vector<std::array<std::array<F, S::size>, 2>> gdata(faces.size());
         const F theta = opt_.diffusion_opening;
 #if defined(_OPENMP)
 #pragma omp parallel for schedule(dynamic, 64)
@@ -1029,13 +1060,15 @@ private:
                     dn[c] -= double(e * (F(1) + far_kappa_[c] * r) * glm::dot(rr, fc.n) / (r * r));
                 }
             };
-            for (const Octree<F, S>* tree : {&tree_, &sec_tree_}) {
+            for (int set = 0; set < 2; ++set) {
+                const Octree<F, S>* tree = set == 0 ? &tree_ : &sec_tree_;
+                phi.fill(0.0);
+                dn.fill(0.0);
                 const auto& nodes = tree->nodes();
                 const auto& items = tree->items();
-                if (nodes.empty()) continue;
                 std::array<std::uint32_t, 256> stack;
                 std::size_t top = 0;
-                stack[top++] = 0;
+                if (!nodes.empty()) stack[top++] = 0;
                 while (top > 0) {
                     const auto& nd = nodes[stack[--top]];
                     const bool whole = glm::length(nd.bounds.hi - nd.bounds.lo) < theta * glm::length(fc.s - nd.p);
@@ -1048,16 +1081,19 @@ private:
                             stack[top++] = nd.first_child + ch;
                     }
                 }
+                for (std::size_t c = 0; c < S::size; ++c)
+                    gdata[std::size_t(fi)][std::size_t(set)][c] = F(phi[c] + 2.0 * double(A) * double(far_D_[c]) * dn[c]);
             }
-            for (std::size_t c = 0; c < S::size; ++c)
-                gdata[std::size_t(fi)][c] = F(phi[c] + 2.0 * double(A) * double(far_D_[c]) * dn[c]);
         }
-        for (std::size_t c = 0; c < S::size; ++c) {
-            std::vector<F> g(faces.size());
-            for (std::size_t f = 0; f < faces.size(); ++f) g[f] = gdata[f][c];
-            const F sa = std::max(F(0), sig_t[c] - sig_s[c]);
-            const std::vector<F> u = dgrid_->solve(far_D_[c], sa, A, {}, g, &far_info_[c]);
-            dfield_[c] = dgrid_->field(u, far_D_[c], A, g);
+        for (int set = 0; set < 2; ++set) {
+            if (set == 1 && sec_tree_.items().empty()) break;
+            for (std::size_t c = 0; c < S::size; ++c) {
+                std::vector<F> g(faces.size());
+                for (std::size_t f = 0; f < faces.size(); ++f) g[f] = gdata[f][std::size_t(set)][c];
+                const F sa = std::max(F(0), sig_t[c] - sig_s[c]);
+                const std::vector<F> u = dgrid_->solve(far_D_[c], sa, A, {}, g, &far_info_[c]);
+                dfield_[std::size_t(set)][c] = dgrid_->field(u, far_D_[c], A, g);
+            }
         }
     }
 
@@ -1414,6 +1450,7 @@ private:
                 S b2(F(0)), b3(F(0));
                 gather_point_tree(sec_tree_, Pk, w, b2, b3, opt_.cut, 0);
                 bsum += wk * (gather_bounced(Pk, w) + b2 + b3);
+                if (dgrid_) bsum += wk * far_field_correction(Pk, -w, 1);
             }
         }
         out.double_ += weight * dsum;
@@ -1441,11 +1478,12 @@ private:
     std::vector<F> k_;
     // Far field (MsFarField::diffusion).
     std::optional<DiffusionGrid<F>> dgrid_;
-    std::array<typename DiffusionGrid<F>::Field, S::size> dfield_{};
+    std::array<std::array<typename DiffusionGrid<F>::Field, S::size>, 2> dfield_{};  ///< [source set][channel]
     std::array<DiffusionSolveInfo, S::size> far_info_{};
     std::array<F, S::size> far_D_{}, far_kappa_{}, far_delta_{}, far_g_{};
     std::array<F, S::size> far_q_{};  ///< alpha sigma_s / (4 pi D): the Green's function's factor per unit weight
     F far_soft_ = F(0);
+    std::array<F, S::size> far_re_{};  ///< the table's escape radius + 2 D (scene units)
 };
 
 }  // namespace grainlight
