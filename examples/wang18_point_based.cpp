@@ -87,6 +87,7 @@ struct Case {
 struct CaseResult {
     wang18::Comparison cmp;  // point-based vs reference (pb, ref, ref_se, rel, rel_se, e2, speed-up)
     double pb_multiple_image = 0, rel_multiple_image = 0;
+    double rel_far_mb = 0, rel_far_total = 0;  ///< the diffusion far field: multiple + bounced, total
     double cpu_pb = 0, cpu_samples = 0, cpu_vpt = 0, bounce_ratio = 0;
     std::size_t volume_samples = 0;
     int spp = 0;
@@ -180,6 +181,31 @@ CaseResult run_case(const gl_examples::Example& ex, const Case& cs, const gl::Ms
         render_pb(true);
         pb.set_ms_boundary_image(false);
     }
+    // The study's third variant: the same light samples with the diffusion far field (our
+    // addition): multiple + bounced and the total.
+    gl::Image far_mb(W, H), far_total(W, H);
+    if (study) {
+        gl::PointBasedOptions<float> pf = po;
+        pf.ms_far_field = gl::MsFarField::diffusion;
+        gl::Rng frng = gl::Rng::from_key(seed, 0x5742u);
+        const Renderer pbf(medium, eta, sphere, gl::sphere_surface_samples(sphere, n_surf),
+                           gl::Light<float, gl::RGB>::quad_light(quad, gl::RGB(Le)), pf, frng, &table,
+                           gl::sphere_surface_samples(sphere, po.bounce_samples));
+        const std::vector<gl::Film> f = wang18::render_rows(
+            ex, "wang18 " + cs.name + " point-based (far field)", cs.name + " point-based (far field)", W, H, 2, 1,
+            [&](int y, std::span<gl::Film> film) {
+                for (int x = 0; x < W; ++x) {
+                    gl::Rng rng = gl::Rng::from_key(seed, std::uint64_t(y) * W + x, 0x10000u);
+                    const gl::Vec2f u = rng.uniform2<float>();
+                    const auto c = pbf.radiance_components(camera.generate_ray(float(x) + u.x, float(y) + u.y), rng);
+                    const gl::RGB mb = c.multiple + c.bounced, t = c.total();
+                    film[0].add_rgb(x, y, mb[0], mb[1], mb[2]);
+                    film[1].add_rgb(x, y, t[0], t[1], t[2]);
+                }
+            });
+        far_mb = f[0].image();
+        far_total = f[1].image();
+    }
 
     // --- VPT reference: one grey walk per channel, kBatches batches (sample s -> batch s % B). ---
     std::vector<SceneG> scenes;
@@ -218,6 +244,9 @@ CaseResult run_case(const gl_examples::Example& ex, const Case& cs, const gl::Ms
         res.pb_multiple_image = image_mean(pb_eq7);
         res.rel_multiple_image =
             res.cmp.ref[2] > 0 ? (res.pb_multiple_image - res.cmp.ref[2]) / res.cmp.ref[2] : 0.0;
+        const double ref_mb = res.cmp.ref[2] + res.cmp.ref[3];
+        res.rel_far_mb = ref_mb > 0 ? image_mean(far_mb) / ref_mb - 1 : 0.0;
+        res.rel_far_total = res.cmp.ref[4] > 0 ? image_mean(far_total) / res.cmp.ref[4] - 1 : 0.0;
     }
 
     if (!study) {  // rank 0 only
@@ -371,27 +400,31 @@ int main(int argc, char** argv) {
                 const float radii[4] = {2, 5, 20, 50};
                 if (ex.root()) std::printf("Multiple-scattering bias study (BmpS., g = 0.7, eta 1.33; multiple = >= 3 events, no "
                             "boundary reflection between events)\n");
-                if (ex.root()) std::printf("  %8s %12s %12s %14s %16s %12s %10s\n", "R/l_g", "VPT mult.", "s.e.", "Eq. 7 (paper)",
-                            "Eq. 7 + image", "total", "bounced");
+                if (ex.root()) std::printf("  %8s %12s %12s %14s %16s %12s %10s %18s %14s\n", "R/l_g", "VPT mult.", "s.e.", "Eq. 7 (paper)",
+                            "Eq. 7 + image", "total", "bounced", "far field: m + b", "far: total");
                 gl_examples::Json j = ex.summary();
                 j.str("study", "bias");
                 wang18::put_rank_rows(ex, j, full ? 96 : 40);
                 gl_examples::Csv csv({"radius_mfp", "vpt_multiple", "rel_se_multiple", "rel_diff_multiple_eq7",
-                                      "rel_diff_multiple_image", "rel_diff_total", "bounced_share"});
+                                      "rel_diff_multiple_image", "rel_diff_total", "bounced_share",
+                                      "rel_diff_far_multiple_bounced", "rel_diff_far_total"});
                 for (float R : radii) {
                     const Case cs{"R" + std::to_string(int(R)), R};
                     const CaseResult r = run_case(ex, cs, table, prm, true);
                     const auto& c = r.cmp;
-                    if (ex.root()) std::printf("  %8.0f %12.5f %11.1f%% %+13.1f%% %+15.1f%% %+11.1f%% %9.1f%%\n", double(R), c.ref[2],
+                    if (ex.root()) std::printf("  %8.0f %12.5f %11.1f%% %+13.1f%% %+15.1f%% %+11.1f%% %9.1f%% %+17.1f%% %+13.1f%%\n", double(R), c.ref[2],
                                 100 * c.rel_se[2], 100 * c.rel[2], 100 * r.rel_multiple_image, 100 * c.rel[4],
-                                100 * c.bounced_share);
+                                100 * c.bounced_share, 100 * r.rel_far_mb, 100 * r.rel_far_total);
                     const std::string p = "R" + std::to_string(int(R)) + "_";
                     j.num(p + "rel_diff_multiple_eq7", c.rel[2])
                         .num(p + "rel_diff_multiple_image", r.rel_multiple_image)
                         .num(p + "rel_se_multiple", c.rel_se[2])
                         .num(p + "rel_diff_total", c.rel[4])
-                        .num(p + "bounced_share", c.bounced_share);
-                    csv.row({double(R), c.ref[2], c.rel_se[2], c.rel[2], r.rel_multiple_image, c.rel[4], c.bounced_share});
+                        .num(p + "bounced_share", c.bounced_share)
+                        .num(p + "rel_diff_far_multiple_bounced", r.rel_far_mb)
+                        .num(p + "rel_diff_far_total", r.rel_far_total);
+                    csv.row({double(R), c.ref[2], c.rel_se[2], c.rel[2], r.rel_multiple_image, c.rel[4], c.bounced_share,
+                             r.rel_far_mb, r.rel_far_total});
                 }
                 if (!ex.root()) return ex.finish({});
                 (void)ex.csv("wang18_point_based_bias_study.csv", csv);
