@@ -391,7 +391,7 @@ struct PointBasedOptions {
     /// Far field and boundary of the multiple-scattering term (see MsFarField; needs a table).
     MsFarField ms_far_field = MsFarField::none;
     /// Cell side of the far field's diffusion grid, in mean free paths of the mean sigma_t (> 0).
-    F diffusion_cell = F(0.5);
+    F diffusion_cell = F(1);
     /// Opening ratio of the tree walk that sums the sources' infinite-medium field at the grid's
     /// boundary faces: a node is used whole when its bounds' diagonal is below this times its
     /// distance (in (0, 2]).
@@ -722,13 +722,13 @@ public:
     /// As gather_point over any sample tree (the light's volume samples, or the secondary volume
     /// samples of the bounced light).
     void gather_point_tree(const Octree<F, S>& tree, const Vec3<F>& P, const Vec3<F>& omega, S& dbl, S& mul,
-                           const CutCriterion<F>& cut, std::uint32_t two_step_depth) const noexcept {
+                           const CutCriterion<F>& cut, std::uint32_t two_step_depth, bool multiple = true) const noexcept {
         if (tree.items().empty()) return;
         const Vec3<F> to_cam = -omega;
         const Phase& ph = medium_.phase();
         auto pval = [&](const Vec3<F>& a, const Vec3<F>& b) { return F(ph.eval(a, b).value.average()); };
         const S sig_s = medium_.sigma_s();
-        const bool with_table = opt_.multiple && has_table();
+        const bool with_table = multiple && opt_.multiple && has_table();
         CutCriterion<F> cut_r = cut;
         if (opt_.cull_optical_distance > F(0))
             cut_r.max_distance = std::min(cut.max_distance, std::max(opt_.double_ ? reach_kernel_ : F(0),
@@ -834,18 +834,12 @@ public:
     /// The light the table's walks dropped beyond their escape radius and that would have come
     /// back to offset rv (emission density per unit scattered power, isotropic; channel c).
     [[nodiscard]] F table_return(std::size_t c, const Vec3<F>& rv) const noexcept {
-        const double k = double(far_kappa_[c]), Re = double(far_re_[c]), r = double(glm::length(rv));
-        double shape;  // e^{-k Re} sinh(k r) / (r sinh(k Re)), -> 1 / Re as k -> 0
-        if (k * Re < 1e-4) {
-            shape = 1.0 / Re;
-        } else {
-            const double x = k * r;
-            const double sr = x < 1e-6 ? k : std::sinh(x) / r;
-            // e^{-k Re} / sinh(k Re) = 2 / (e^{2 k Re} - 1)
-            shape = sr * 2.0 / std::expm1(2.0 * k * Re);
-        }
-        const double a = double(medium_.albedo()[c]) / (4.0 * pi_v<double> * double(far_D_[c]));
-        return F(double(medium_.sigma_s()[c]) * double(inv_four_pi_v<F>) * a * shape);
+        // far_ret_ = sigma_s / (4 pi) alpha / (4 pi D) e^{-k Re} / sinh(k Re) (k Re > 1e-4) or
+        // the same with 1 / Re and no sinh (k -> 0): the shape is sinh(k r) / r or 1.
+        const F k = far_kappa_[c];
+        if (k * far_re_[c] <= F(1e-4)) return far_ret_[c];
+        const F x = k * glm::length(rv);
+        return far_ret_[c] * (x < F(1e-3) ? k * (F(1) + x * x / F(6)) : k * std::sinh(x) / x);
     }
     /// Multiple-scattering response with the far field on: the table where the channel's (rho, z)
     /// is on its grid, far_kernel() beyond.
@@ -1033,6 +1027,11 @@ private:
             // The dropped particles' return (MsFarField doc): alpha / (4 pi D) e^{-k Re} sinh(k r)
             // / (r sinh(k Re)) with Re the escape radius plus the extrapolation length 2 D.
             far_re_[c] = opt_.ms_table_escape_radius / sig_t[c] + F(2) * far_D_[c];
+            const double kr = double(far_kappa_[c]) * double(far_re_[c]);
+            const double a = double(sig_s[c]) / (4.0 * pi_v<double>) * double(medium_.albedo()[c]) /
+                             (4.0 * pi_v<double> * double(far_D_[c]));
+            // e^{-k Re} / sinh(k Re) = 2 / (e^{2 k Re} - 1)
+            far_ret_[c] = F(kr <= 1e-4 ? a / double(far_re_[c]) : a * 2.0 / std::expm1(2.0 * kr));
         }
         Aabb<F> box;
         for (const SurfaceSample<F>& sp : surface) box.expand(sp.p);
@@ -1278,7 +1277,9 @@ private:
                 Vec3<F> ne;
                 if (!boundary_.intersect(Ray<F>(o, w), te, ne)) continue;
                 PointBasedComponents<S> c;
-                gather_segment(o, w, te, S(F(1)), r, c, opt_.bounce_k_max, primary, bounced);
+                // With the far field the multiply scattered light is not reflected here: skip it.
+                gather_segment(o, w, te, S(F(1)), r, c, opt_.bounce_k_max, primary, bounced,
+                               opt_.ms_far_field == MsFarField::none);
                 // Light arriving along -w hits the boundary from inside at cosine wl.z. With the
                 // far field, the reflection of the multiply scattered (diffuse) light is in its
                 // Robin condition: only the single- and double-scattered light is reflected here.
@@ -1410,9 +1411,11 @@ private:
         gather_segment(o, w, dmax, weight, rng, out, opt_.k_max, true, true);
     }
     /// `primary`: single, double and multiple from the light's volume samples; `with_bounced`:
-    /// the bounced term (Eq. 8 + the secondary samples' Eqs. 6 and 7).
+    /// the bounced term (Eq. 8 + the secondary samples' Eqs. 6 and 7); `with_multiple` false: no
+    /// table term (Eq. 7) from either sample set.
     void gather_segment(const Vec3<F>& o, const Vec3<F>& w, F dmax, const S& weight, Rng& rng,
-                        PointBasedComponents<S>& out, int k_max, bool primary, bool with_bounced) const noexcept {
+                        PointBasedComponents<S>& out, int k_max, bool primary, bool with_bounced,
+                        bool with_multiple = true) const noexcept {
         const S sig_s = medium_.sigma_s();
         const S& sig_t = medium_.sigma_t();
         const Phase& ph = medium_.phase();
@@ -1431,7 +1434,7 @@ private:
             out.single += weight * sig_s * acc;
         }
         const bool bounced = with_bounced && !surf_tree_.items().empty();
-        const bool prim = primary && (opt_.double_ || (opt_.multiple && has_table()));
+        const bool prim = primary && (opt_.double_ || (with_multiple && opt_.multiple && has_table()));
         if (!(prim || bounced)) return;
         const CameraDepthSampler<S> ds(sig_t, dmax, opt_.depth_sampling);
         if (!ds.valid()) return;
@@ -1442,13 +1445,13 @@ private:
             const F dk = ds.sample((F(k) + xi) / F(k_max), k_max, wk);  // Eq. 10 (jittered)
             S dbl(F(0)), mul(F(0));
             const Vec3<F> Pk = o + dk * w;
-            if (prim) gather_point(Pk, w, dbl, mul);
-            if (prim && dgrid_ && opt_.multiple) mul += far_field_correction(Pk, -w);
+            if (prim) gather_point_tree(tree_, Pk, w, dbl, mul, opt_.cut, opt_.two_step_depth, with_multiple);
+            if (prim && dgrid_ && opt_.multiple && with_multiple) mul += far_field_correction(Pk, -w);
             dsum += wk * dbl;
             msum += wk * mul;
             if (bounced) {
                 S b2(F(0)), b3(F(0));
-                gather_point_tree(sec_tree_, Pk, w, b2, b3, opt_.cut, 0);
+                gather_point_tree(sec_tree_, Pk, w, b2, b3, opt_.cut, 0, with_multiple);
                 bsum += wk * (gather_bounced(Pk, w) + b2 + b3);
                 if (dgrid_) bsum += wk * far_field_correction(Pk, -w, 1);
             }
@@ -1483,7 +1486,7 @@ private:
     std::array<F, S::size> far_D_{}, far_kappa_{}, far_delta_{}, far_g_{};
     std::array<F, S::size> far_q_{};  ///< alpha sigma_s / (4 pi D): the Green's function's factor per unit weight
     F far_soft_ = F(0);
-    std::array<F, S::size> far_re_{};  ///< the table's escape radius + 2 D (scene units)
+    std::array<F, S::size> far_re_{}, far_ret_{};  ///< the table's escape radius + 2 D (scene units)
 };
 
 }  // namespace grainlight
