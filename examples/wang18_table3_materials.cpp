@@ -16,7 +16,9 @@
 //   - beside it: Table 3's time ratio of UPBP to the paper's offline method, its MSE, and
 //     Table 2's table memory.
 // The multiple-scattering table of each material is built once and cached in --out under a name
-// made of its parameters.
+// made of its parameters. By default the multiple term adds the diffusion far field
+// (PointBasedOptions::ms_far_field, our addition: the table's own near field, diffusion beyond
+// it and the bounded medium's correction; `--ms-far-field none` is the paper's Eq. 7 alone).
 //
 //   wang18_table3_materials [--quality quick|full] [--out DIR] [--seed S] [--threads N]
 //                           [--materials oil,wax,milk,bmps] [--pb-spp N] [--vpt-spp N] ...
@@ -102,14 +104,15 @@ struct ScatteredOnly {
 };
 
 struct Settings {
-    int W = 32, pb_spp = 4, vpt_spp = 64, surface = 12000, bounce = 512, k_max = 6;
+    int W = 32, pb_spp = 4, vpt_spp = 64, surface = 12000, bounce = 512, k_max = 2;
     int max_cells = 128;  ///< cap on the table's radial cells (axial: twice)
     float table_range = 10;  ///< table extent in mean free paths (0: automatic)
     bool ms_image = false;   ///< boundary image of the multiple term (PointBasedOptions::ms_boundary_image)
     float ms_image_offset = 0;  ///< its offset in transport mean free paths
-    gl::MsFarField far_field = gl::MsFarField::none;  ///< PointBasedOptions::ms_far_field
-    float diffusion_cell = 0.5f;  ///< its grid cell in mean free paths
-    std::string bounced = "auto";  ///< Eq. 8: on, off, auto (off with the far field)
+    gl::MsFarField far_field = gl::MsFarField::diffusion;  ///< PointBasedOptions::ms_far_field
+    float diffusion_cell = 2.0f;  ///< its grid cell in mean free paths
+    std::string bounced = "auto";
+    float ms_eps1 = 0;  ///< PointBasedOptions::ms_cut_eps1  ///< Eq. 8: on, off, auto (off with the far field)
     int vpt_max_depth = 0;   ///< VPT path cap in events (0: none; the paper's UPBP: 50)
     gl::DepthSampling depth_sampling = gl::DepthSampling::min_extinction;  ///< camera samples of Eq. 10
     std::string table_read = "dense";  ///< the table the renderer reads: dense, merged (5 %), noise
@@ -264,6 +267,7 @@ Result run_material(const gl_examples::Example& ex, const Material& mat, const S
     po.ms_image_offset = st.ms_image_offset;
     po.ms_far_field = st.far_field;
     po.diffusion_cell = st.diffusion_cell;
+    po.ms_cut_eps1 = st.ms_eps1;
     // The far field's Robin condition carries the boundary's reflection of diffuse light: no Eq. 8.
     po.bounced = st.bounced != "off";
     c0 = cpu_seconds();
@@ -528,21 +532,22 @@ int main(int argc, char** argv) {
         [&](gl_examples::Example& ex) {
             Settings st;
             const std::string mats = ex.opt<std::string>("materials", "oil,wax,milk,bmps", "comma-separated subset of oil,wax,milk,bmps");
-            st.W = ex.opt<int>("width", 32, 64, "image width and height in pixels");
+            st.W = ex.opt<int>("width", 32, 128, "image width and height in pixels");
             st.pb_spp = ex.opt<int>("pb-spp", 4, 4, "point-based camera rays per pixel (stratified; >= 2)");
-            st.vpt_spp = ex.opt<int>("vpt-spp", 64, 1024, "VPT samples per pixel and channel (multiple of 8)");
+            st.vpt_spp = ex.opt<int>("vpt-spp", 64, 2048, "VPT samples per pixel and channel (multiple of 8)");
             st.surface = ex.opt<int>("surface-samples", 12000, 20000, "light surface samples on the sphere");
             st.bounce = ex.opt<int>("bounce-samples", 512, 1024, "bounce surface samples (Eq. 8)");
-            st.k_max = ex.opt<int>("k-max", 6, 6, "camera samples per inside segment (Eq. 10)");
-            st.eps1 = ex.opt<float>("eps1", 1.0f, 0.5f, "Alg. 1 solid-angle threshold eps1 (sr; eps2 = eps1 / 5)");
+            st.k_max = ex.opt<int>("k-max", 2, 2, "camera samples per inside segment (Eq. 10)");
+            st.eps1 = ex.opt<float>("eps1", 1.0f, 1.0f, "Alg. 1 solid-angle threshold eps1 (sr; eps2 = eps1 / 5)");
             const int photons = ex.opt<int>("table-photons", 200000, 2000000, "particles of each MS table");
             st.ms_image = ex.opt<bool>("ms-image", false, "boundary image of the multiple-scattering term (method of images)");
             st.ms_image_offset = ex.opt<float>("ms-image-offset", 0.0f, "image plane offset in transport mean free paths");
             const std::string far = ex.opt<std::string>(
-                "ms-far-field", "none",
+                "ms-far-field", "diffusion",
                 "multiple scattering beyond the table and at the boundary: none (the paper's Eq. 7) or diffusion (the bounded-medium "
                 "diffusion correction on a grid; the bounced term is then off)");
-            st.diffusion_cell = ex.opt<float>("diffusion-cell", 1.0f, "far field grid cell in mean free paths");
+            st.diffusion_cell = ex.opt<float>("diffusion-cell", 2.0f, "far field grid cell in mean free paths");
+            st.ms_eps1 = ex.opt<float>("ms-eps1", 0.0f, "solid-angle threshold of a separate, coarser cut for the table term (sr; 0: the double-scattering cut)");
             st.bounced = ex.opt<std::string>("bounced", "auto", "the bounced term (Eq. 8): on, off, auto (on; with the far field it reflects single and double scattering)");
             st.vpt_max_depth = ex.opt<int>("vpt-max-depth", 0, "cap the VPT paths at this many events (0: none; the paper's UPBP reference: 50)");
             st.table_range = ex.opt<float>("table-range", 10.0f, "MS table extent +-range in mean free paths (0: 5 diffusion lengths, at most the sphere)");
@@ -737,6 +742,10 @@ int main(int argc, char** argv) {
             auto j = ex.summary();
             wang18::put_rank_rows(ex, j, st.W);
             j.integer("pb_spp", st.pb_spp).integer("vpt_spp", st.vpt_spp).integer("width", st.W);
+            j.str("ms_far_field", st.far_field == gl::MsFarField::diffusion ? "diffusion" : "none")
+                .num("diffusion_cell", st.diffusion_cell)
+                .integer("k_max", st.k_max)
+                .num("eps1", st.eps1);
             j.raw("materials", jm.str());
             if (have_paper) j.raw("paper_table", jp.str());
             for (const auto& [k, v] : flat) j.num(k, v);

@@ -396,6 +396,12 @@ struct PointBasedOptions {
     /// boundary faces: a node is used whole when its bounds' diagonal is below this times its
     /// distance (in (0, 2]).
     F diffusion_opening = F(0.5);
+    /// Solid-angle threshold of a separate, coarser Alg. 1 cut for the table term (Eq. 7) only
+    /// (our addition; sr). 0: the table term rides on the double-scattering cut, as in the
+    /// paper. The table's lobes vary slowly in space and direction, while Eq. 6's cut is refined
+    /// for peaked phase functions, so a coarser cut for Eq. 7 saves most of its table lookups
+    /// (memory-bound on a large table).
+    F ms_cut_eps1 = F(0);
     /// The escape radius the table was built with (MsTableOptions::escape_radius, mean free
     /// paths; > 0): its walks drop the particles beyond it, so the table lacks the light that
     /// would have come back. With the far field, that light is added back on the table's grid as
@@ -542,6 +548,8 @@ public:
                        "volume_step/r_min", opt.volume_step, "finite");
         check_argument(opt.max_optical_depth > F(0), "PointBasedRenderer", "max_optical_depth", opt.max_optical_depth,
                        "(0, inf)");
+        check_argument(std::isfinite(opt.ms_cut_eps1) && opt.ms_cut_eps1 >= F(0), "PointBasedRenderer", "ms_cut_eps1",
+                       opt.ms_cut_eps1, "[0, inf) sr");
         check_argument(opt.cut.eps1 >= F(0) && opt.cut.eps2 >= F(0), "PointBasedRenderer", "cut.eps1/eps2",
                        opt.cut.eps1, "[0, inf)");
         if (ms) {
@@ -729,21 +737,20 @@ public:
         auto pval = [&](const Vec3<F>& a, const Vec3<F>& b) { return F(ph.eval(a, b).value.average()); };
         const S sig_s = medium_.sigma_s();
         const bool with_table = multiple && opt_.multiple && has_table();
-        CutCriterion<F> cut_r = cut;
-        if (opt_.cull_optical_distance > F(0))
-            cut_r.max_distance = std::min(cut.max_distance, std::max(opt_.double_ ? reach_kernel_ : F(0),
-                                                                     with_table ? reach_table_ : F(0)));
+        // With ms_cut_eps1 > 0 the table term has its own, coarser cut (two traversals).
+        const bool split = with_table && opt_.double_ && opt_.ms_cut_eps1 > F(0);
+        bool do_double = opt_.double_, do_table = with_table;
         auto contrib = [&](const Vec3<F>& xv, const Vec3<F>& dv, const S& wv, F coherence, F c_view) {
             const Vec3<F> rv = P - xv;
             const F r = glm::length(rv);
             if (!(r > F(0))) return;
             const Vec3<F> rh = rv / r;
-            if (opt_.double_) {
+            if (do_double) {
                 const S pp = light_phase(dv, rh, coherence * c_view) * light_phase(rh, to_cam, c_view);
                 const F k = inverse_square_ball(r, r_min_);
                 dbl += sig_s * sig_s * wv * medium_.transmittance(r) * pp * k;
             }
-            if (with_table && r <= reach_table_) {  // beyond reach_table_ the table is 0 in every channel
+            if (do_table && r <= reach_table_) {  // beyond reach_table_ the table is 0 in every channel
                 S m = dgrid_ ? table_or_far(P, xv, dv, coherence, to_cam) : table_response(rv, dv, to_cam);
                 if constexpr (TangentPlaneBoundary<Boundary, F>) {
                     if (opt_.ms_boundary_image && !dgrid_) {
@@ -769,16 +776,34 @@ public:
             else contrib(nd.p, nd.d, nd.w, F(1), F(1));
         };
         auto item_fn = [&](const Item& it) { contrib(it.p, it.d, it.w, F(1), F(1)); };
-        if (two_step_depth > 0) {
-            std::array<std::uint32_t, 1024> buf;
-            const std::size_t n = tree.coarse_cut(P, to_cam, cut_r, pval, two_step_depth, std::span(buf));
-            if (n <= buf.size()) {
-                tree.tree_cut_from(std::span<const std::uint32_t>(buf.data(), n), P, to_cam, cut_r, pval, node_fn,
-                                    item_fn);
-                return;
+        auto run_cut = [&](const CutCriterion<F>& c) {
+            CutCriterion<F> cut_r = c;
+            if (opt_.cull_optical_distance > F(0))
+                cut_r.max_distance = std::min(c.max_distance, std::max(do_double ? reach_kernel_ : F(0),
+                                                                       do_table ? reach_table_ : F(0)));
+            if (two_step_depth > 0) {
+                std::array<std::uint32_t, 1024> buf;
+                const std::size_t n = tree.coarse_cut(P, to_cam, cut_r, pval, two_step_depth, std::span(buf));
+                if (n <= buf.size()) {
+                    tree.tree_cut_from(std::span<const std::uint32_t>(buf.data(), n), P, to_cam, cut_r, pval, node_fn,
+                                        item_fn);
+                    return;
+                }
             }
+            tree.tree_cut(P, to_cam, cut_r, pval, node_fn, item_fn);
+        };
+        if (!split) {
+            run_cut(cut);
+            return;
         }
-        tree.tree_cut(P, to_cam, cut_r, pval, node_fn, item_fn);
+        do_table = false;
+        run_cut(cut);
+        do_double = false;
+        do_table = true;
+        CutCriterion<F> cm = cut;
+        cm.eps1 = std::max(cut.eps1, opt_.ms_cut_eps1);
+        cm.eps2 = cm.eps1;  // the table's lobes are smooth: no finer cut for a peaked phase
+        run_cut(cm);
     }
 
     /// Table response (Eq. 7 without the source power) at offset rv = P - x_v from a source
