@@ -104,7 +104,7 @@ struct ScatteredOnly {
 };
 
 struct Settings {
-    int W = 32, pb_spp = 4, vpt_spp = 64, surface = 12000, bounce = 512, k_max = 2;
+    int W = 32, pb_spp = 4, vpt_spp = 64, surface = 12000, bounce = 512, k_max = 1;
     int max_cells = 128;  ///< cap on the table's radial cells (axial: twice)
     float table_range = 10;  ///< table extent in mean free paths (0: automatic)
     bool ms_image = false;   ///< boundary image of the multiple term (PointBasedOptions::ms_boundary_image)
@@ -535,11 +535,13 @@ int main(int argc, char** argv) {
             st.W = ex.opt<int>("width", 32, 128, "image width and height in pixels");
             st.pb_spp = ex.opt<int>("pb-spp", 4, 4, "point-based camera rays per pixel (stratified; >= 2)");
             st.vpt_spp = ex.opt<int>("vpt-spp", 64, 2048, "VPT samples per pixel and channel (multiple of 8)");
-            st.surface = ex.opt<int>("surface-samples", 12000, 20000, "light surface samples on the sphere");
-            st.bounce = ex.opt<int>("bounce-samples", 512, 1024, "bounce surface samples (Eq. 8)");
-            st.k_max = ex.opt<int>("k-max", 2, 2, "camera samples per inside segment (Eq. 10)");
+            st.surface = ex.opt<int>("surface-samples", 12000, 12000, "light surface samples on the sphere");
+            st.bounce = ex.opt<int>("bounce-samples", 512, 512, "bounce surface samples (Eq. 8)");
+            st.k_max = ex.opt<int>("k-max", 1, 1, "camera samples per inside segment (Eq. 10)");
             st.eps1 = ex.opt<float>("eps1", 1.0f, 1.0f, "Alg. 1 solid-angle threshold eps1 (sr; eps2 = eps1 / 5)");
             const int photons = ex.opt<int>("table-photons", 200000, 2000000, "particles of each MS table");
+            const int table_cells = ex.opt<int>("table-cells", 48, 48, "MS table radial cells over +-range (axial: twice)");
+            const int table_bins = ex.opt<int>("table-bins", 12, 12, "MS table polar direction bins (azimuth: half)");
             st.ms_image = ex.opt<bool>("ms-image", false, "boundary image of the multiple-scattering term (method of images)");
             st.ms_image_offset = ex.opt<float>("ms-image-offset", 0.0f, "image plane offset in transport mean free paths");
             const std::string far = ex.opt<std::string>(
@@ -589,10 +591,13 @@ int main(int argc, char** argv) {
             else if (depth == "mixture") st.depth_sampling = gl::DepthSampling::channel_mixture;
             else throw gl_examples::cli_error("--depth-sampling must be min, average or mixture, got '" + depth + "'");
             const bool full = ex.full();
-            st.table.n_rho = full ? 96 : 48;
-            st.table.n_z = full ? 192 : 96;
-            st.table.n_theta = full ? 18 : 12;
-            st.table.n_phi = full ? 9 : 6;
+            if (table_cells < 4 || table_cells > 1024) throw gl_examples::cli_error("--table-cells must be in [4, 1024]");
+            if (table_bins < 2 || table_bins > 64 || table_bins % 2 != 0)
+                throw gl_examples::cli_error("--table-bins must be even and in [2, 64]");
+            st.table.n_rho = std::uint32_t(table_cells);
+            st.table.n_z = std::uint32_t(2 * table_cells);
+            st.table.n_theta = std::uint32_t(table_bins);
+            st.table.n_phi = std::uint32_t(table_bins / 2);
             st.table.rho_max = 10;
             st.table.z_min = -10;
             st.table.z_max = 10;

@@ -43,6 +43,9 @@ if(TARGET wang18_table3_materials OR (GRAINLIGHT_BUILD_EXAMPLES AND EXISTS ${PRO
     ARGS "--quality;quick;--threads;2;--out;${CMAKE_CURRENT_BINARY_DIR}/wang18_table3_materials"
     CHECKS "${_w18_checks}"
     BAD_NAME wang18_table3_materials_bad_argument BAD_ARGS --materials glass)
+  add_test(NAME wang18_table3_materials_bad_far_field COMMAND $<TARGET_FILE:wang18_table3_materials> --ms-far-field mirror)
+  set_tests_properties(wang18_table3_materials_bad_far_field PROPERTIES
+                       PASS_REGULAR_EXPRESSION "ms-far-field must be none or diffusion, got 'mirror'" LABELS "example;point_based")
 endif()
 
 # wang18_fig12_components at quick quality (bumpy sphere mesh, radius 20 green mfp, 3 light-sample
