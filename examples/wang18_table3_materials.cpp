@@ -111,8 +111,9 @@ struct Settings {
     float ms_image_offset = 0;  ///< its offset in transport mean free paths
     gl::MsFarField far_field = gl::MsFarField::diffusion;  ///< PointBasedOptions::ms_far_field
     float diffusion_cell = 2.0f;  ///< its grid cell in mean free paths
-    std::string bounced = "auto";
-    float ms_eps1 = 0;  ///< PointBasedOptions::ms_cut_eps1  ///< Eq. 8: on, off, auto (off with the far field)
+    std::string bounced = "auto";  ///< Eq. 8: on, off, auto (on)
+    float ms_eps1 = 0;  ///< PointBasedOptions::ms_cut_eps1
+    float bounce_cut = 4;  ///< PointBasedOptions::bounce_cut_scale
     int vpt_max_depth = 0;   ///< VPT path cap in events (0: none; the paper's UPBP: 50)
     gl::DepthSampling depth_sampling = gl::DepthSampling::min_extinction;  ///< camera samples of Eq. 10
     std::string table_read = "dense";  ///< the table the renderer reads: dense, merged (5 %), noise
@@ -268,6 +269,7 @@ Result run_material(const gl_examples::Example& ex, const Material& mat, const S
     po.ms_far_field = st.far_field;
     po.diffusion_cell = st.diffusion_cell;
     po.ms_cut_eps1 = st.ms_eps1;
+    po.bounce_cut_scale = st.bounce_cut;
     // The far field's Robin condition carries the boundary's reflection of diffuse light: no Eq. 8.
     po.bounced = st.bounced != "off";
     c0 = cpu_seconds();
@@ -550,6 +552,7 @@ int main(int argc, char** argv) {
                 "diffusion correction on a grid; the bounced term is then off)");
             st.diffusion_cell = ex.opt<float>("diffusion-cell", 2.0f, "far field grid cell in mean free paths");
             st.ms_eps1 = ex.opt<float>("ms-eps1", 0.0f, "solid-angle threshold of a separate, coarser cut for the table term (sr; 0: the double-scattering cut)");
+            st.bounce_cut = ex.opt<float>("bounce-cut-scale", 4.0f, "scale of eps1 and eps2 for the bounced term's cuts (>= 1)");
             st.bounced = ex.opt<std::string>("bounced", "auto", "the bounced term (Eq. 8): on, off, auto (on; with the far field it reflects single and double scattering)");
             st.vpt_max_depth = ex.opt<int>("vpt-max-depth", 0, "cap the VPT paths at this many events (0: none; the paper's UPBP reference: 50)");
             st.table_range = ex.opt<float>("table-range", 10.0f, "MS table extent +-range in mean free paths (0: 5 diffusion lengths, at most the sphere)");
@@ -584,6 +587,8 @@ int main(int argc, char** argv) {
             if (far == "none") st.far_field = gl::MsFarField::none;
             else if (far == "diffusion") st.far_field = gl::MsFarField::diffusion;
             else throw gl_examples::cli_error("--ms-far-field must be none or diffusion, got '" + far + "'");
+            if (!(st.bounce_cut >= 1 && st.bounce_cut <= 100))
+                throw gl_examples::cli_error("--bounce-cut-scale must be in [1, 100]");
             if (!(st.diffusion_cell > 0.05f && st.diffusion_cell <= 10))
                 throw gl_examples::cli_error("--diffusion-cell must be in (0.05, 10] mean free paths");
             if (depth == "min") st.depth_sampling = gl::DepthSampling::min_extinction;
@@ -750,6 +755,7 @@ int main(int argc, char** argv) {
             j.str("ms_far_field", st.far_field == gl::MsFarField::diffusion ? "diffusion" : "none")
                 .num("diffusion_cell", st.diffusion_cell)
                 .integer("k_max", st.k_max)
+                .num("bounce_cut_scale", st.bounce_cut)
                 .num("eps1", st.eps1);
             j.raw("materials", jm.str());
             if (have_paper) j.raw("paper_table", jp.str());

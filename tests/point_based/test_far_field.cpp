@@ -134,4 +134,12 @@ TEST_CASE("far field: bad input", "[point_based][far-field]") {
     o.diffusion_opening = 3.0f;
     CHECK_THROWS_WITH(Renderer(thick_medium(), kEta, sphere(), samples, light, o, lrng, &small_table()),
                       Catch::Contains("diffusion_opening"));
+    o.diffusion_opening = 0.5f;
+    o.bounce_cut_scale = 0.5f;
+    CHECK_THROWS_WITH(Renderer(thick_medium(), kEta, sphere(), samples, light, o, lrng, &small_table()),
+                      Catch::Contains("bounce_cut_scale"));
+    o.bounce_cut_scale = 1.0f;
+    o.ms_cut_eps1 = -1.0f;
+    CHECK_THROWS_WITH(Renderer(thick_medium(), kEta, sphere(), samples, light, o, lrng, &small_table()),
+                      Catch::Contains("ms_cut_eps1"));
 }

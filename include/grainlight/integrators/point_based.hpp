@@ -396,6 +396,11 @@ struct PointBasedOptions {
     /// boundary faces: a node is used whole when its bounds' diagonal is below this times its
     /// distance (in (0, 2]).
     F diffusion_opening = F(0.5);
+    /// Scale of the Alg. 1 thresholds (eps1, eps2) for the bounced term's cuts on the camera side
+    /// (Eq. 8 over the bounce samples, Eqs. 6 and 7 over the secondary samples; our addition,
+    /// >= 1). The bounced light is a small, smooth share of the total, so a coarser cut there
+    /// costs little accuracy and half of the render time on BmpS. (docs/wang18.md).
+    F bounce_cut_scale = F(1);
     /// Solid-angle threshold of a separate, coarser Alg. 1 cut for the table term (Eq. 7) only
     /// (our addition; sr). 0: the table term rides on the double-scattering cut, as in the
     /// paper. The table's lobes vary slowly in space and direction, while Eq. 6's cut is refined
@@ -550,6 +555,11 @@ public:
                        "(0, inf)");
         check_argument(std::isfinite(opt.ms_cut_eps1) && opt.ms_cut_eps1 >= F(0), "PointBasedRenderer", "ms_cut_eps1",
                        opt.ms_cut_eps1, "[0, inf) sr");
+        check_argument(std::isfinite(opt.bounce_cut_scale) && opt.bounce_cut_scale >= F(1), "PointBasedRenderer",
+                       "bounce_cut_scale", opt.bounce_cut_scale, "[1, inf)");
+        bounce_cut_ = opt.cut;
+        bounce_cut_.eps1 *= opt.bounce_cut_scale;
+        bounce_cut_.eps2 *= opt.bounce_cut_scale;
         check_argument(opt.cut.eps1 >= F(0) && opt.cut.eps2 >= F(0), "PointBasedRenderer", "cut.eps1/eps2",
                        opt.cut.eps1, "[0, inf)");
         if (ms) {
@@ -1476,8 +1486,8 @@ private:
             msum += wk * mul;
             if (bounced) {
                 S b2(F(0)), b3(F(0));
-                gather_point_tree(sec_tree_, Pk, w, b2, b3, opt_.cut, 0, with_multiple);
-                bsum += wk * (gather_bounced(Pk, w) + b2 + b3);
+                gather_point_tree(sec_tree_, Pk, w, b2, b3, bounce_cut_, 0, with_multiple);
+                bsum += wk * (gather_bounced(Pk, w, bounce_cut_) + b2 + b3);
                 if (dgrid_) bsum += wk * far_field_correction(Pk, -w, 1);
             }
         }
@@ -1504,6 +1514,7 @@ private:
     F bounce_area_ = F(1);  ///< mean area of a bounce surface sample
     std::vector<Box> boxes_;
     std::vector<F> k_;
+    CutCriterion<F> bounce_cut_{};  ///< the bounced term's camera-side cut (bounce_cut_scale)
     // Far field (MsFarField::diffusion).
     std::optional<DiffusionGrid<F>> dgrid_;
     std::array<std::array<typename DiffusionGrid<F>::Field, S::size>, 2> dfield_{};  ///< [source set][channel]
