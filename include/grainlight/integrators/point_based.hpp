@@ -335,10 +335,12 @@ private:
 enum class MsFarField {
     /// The paper's Eq. 7 as is: the infinite-medium table, zero beyond its grid.
     none,
-    /// Our addition (not in the paper): the table within its grid; beyond it the infinite-medium
-    /// diffusion Green's function of the same sources; and everywhere the bounded-medium
-    /// correction u = phi_bounded - phi_infinite of diffusion theory, solved once on a grid over
-    /// the boundary (diffusion/grid.hpp, Robin condition with the boundary's A). The light that
+    /// Our addition (not in the paper): the table within its grid, plus the light its walks
+    /// dropped beyond their escape radius and would have brought back
+    /// (`ms_table_escape_radius`); beyond the grid the infinite-medium diffusion Green's function
+    /// of the same sources; and everywhere the bounded-medium correction u = phi_bounded -
+    /// phi_infinite of diffusion theory, solved once on a grid over the boundary
+    /// (diffusion/grid.hpp, Robin condition with the boundary's A). The light that
     /// the infinite-medium table counts although it would have left the medium, and the light
     /// that diffuses farther than the table reaches, are then both accounted for (docs/wang18.md).
     /// The boundary's reflection of the multiply scattered light is in the Robin condition, so
@@ -384,6 +386,7 @@ struct PointBasedOptions {
     /// plane shifted outward by `ms_image_offset` transport mean free paths (method of images;
     /// needs a TangentPlaneBoundary). Off by default (the paper's Eq. 7 as is): it removes the
     /// over-count at 5 mean free paths but over-corrects by ~20 % at 20-50 (docs/wang18.md).
+    /// Ignored with `ms_far_field = MsFarField::diffusion`, which corrects for the boundary itself.
     bool ms_boundary_image = false;
     /// Offset of the mirrored source beyond the tangent plane, in transport mean free paths
     /// 1 / (sigma_t (1 - albedo g)) (used only with ms_boundary_image).
