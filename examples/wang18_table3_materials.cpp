@@ -114,6 +114,7 @@ struct Settings {
     std::string bounced = "auto";  ///< Eq. 8: on, off, auto (on)
     float ms_eps1 = 0;  ///< PointBasedOptions::ms_cut_eps1
     float bounce_cut = 4;  ///< PointBasedOptions::bounce_cut_scale
+    int light_samples = 2;  ///< points on the quad light per light surface sample
     int vpt_max_depth = 0;   ///< VPT path cap in events (0: none; the paper's UPBP: 50)
     gl::DepthSampling depth_sampling = gl::DepthSampling::min_extinction;  ///< camera samples of Eq. 10
     std::string table_read = "dense";  ///< the table the renderer reads: dense, merged (5 %), noise
@@ -251,7 +252,7 @@ Result run_material(const gl_examples::Example& ex, const Material& mat, const S
 
     // --- Point-based: light samples once, then pb_spp camera rays per pixel. ---
     gl::PointBasedOptions<float> po;
-    po.light_samples = 2;
+    po.light_samples = st.light_samples;
     po.volume_step = 0.2f / sigma_t.average();
     po.k_max = st.k_max;
     po.depth_sampling = st.depth_sampling;
@@ -552,6 +553,7 @@ int main(int argc, char** argv) {
                 "diffusion correction on a grid; the bounced term is then off)");
             st.diffusion_cell = ex.opt<float>("diffusion-cell", 2.0f, "far field grid cell in mean free paths");
             st.ms_eps1 = ex.opt<float>("ms-eps1", 0.0f, "solid-angle threshold of a separate, coarser cut for the table term (sr; 0: the double-scattering cut)");
+            st.light_samples = ex.opt<int>("light-samples", 2, 2, "points on the quad light per light surface sample (stratified)");
             st.bounce_cut = ex.opt<float>("bounce-cut-scale", 4.0f, "scale of eps1 and eps2 for the bounced term's cuts (>= 1)");
             st.bounced = ex.opt<std::string>("bounced", "auto", "the bounced term (Eq. 8): on, off, auto (on; with the far field it reflects single and double scattering)");
             st.vpt_max_depth = ex.opt<int>("vpt-max-depth", 0, "cap the VPT paths at this many events (0: none; the paper's UPBP reference: 50)");
@@ -587,6 +589,7 @@ int main(int argc, char** argv) {
             if (far == "none") st.far_field = gl::MsFarField::none;
             else if (far == "diffusion") st.far_field = gl::MsFarField::diffusion;
             else throw gl_examples::cli_error("--ms-far-field must be none or diffusion, got '" + far + "'");
+            if (st.light_samples < 1 || st.light_samples > 64) throw gl_examples::cli_error("--light-samples must be in [1, 64]");
             if (!(st.bounce_cut >= 1 && st.bounce_cut <= 100))
                 throw gl_examples::cli_error("--bounce-cut-scale must be in [1, 100]");
             if (!(st.diffusion_cell > 0.05f && st.diffusion_cell <= 10))
