@@ -143,65 +143,57 @@ CaseResult run_case(const gl_examples::Example& ex, const Case& cs, const gl::Ms
     gl::Image pb_eq7(W, H);
     // Rows through the render driver (wang18_bumpy.hpp render_rows: checkpoints, rows split over
     // MPI ranks and gathered on rank 0); every pixel has its own key, so any thread or rank count
-    // gives the same image.
-    auto render_pb = [&](bool eq7_only) {
-        const std::string what = eq7_only ? " point-based (boundary image)" : " point-based";
-        const std::vector<gl::Film> f = wang18::render_rows(
-            ex, "wang18 " + cs.name + what, cs.name + what, W, H, eq7_only ? 1 : kComp, 1,
-            [&](int y, std::span<gl::Film> film) {
-                for (int x = 0; x < W; ++x) {
-                    gl::Rng rng = gl::Rng::from_key(seed, std::uint64_t(y) * W + x, 0x10000u);
-                    const gl::Vec2f u = rng.uniform2<float>();
-                    const auto c = pb.radiance_components(camera.generate_ray(float(x) + u.x, float(y) + u.y), rng);
-                    if (eq7_only) {
-                        film[0].add_rgb(x, y, c.multiple[0], c.multiple[1], c.multiple[2]);
-                        continue;
-                    }
-                    const gl::RGB t = c.total();
-                    film[0].add_rgb(x, y, c.single[0], c.single[1], c.single[2]);
-                    film[1].add_rgb(x, y, c.double_[0], c.double_[1], c.double_[2]);
-                    film[2].add_rgb(x, y, c.multiple[0], c.multiple[1], c.multiple[2]);
-                    film[3].add_rgb(x, y, c.bounced[0], c.bounced[1], c.bounced[2]);
-                    film[4].add_rgb(x, y, t[0], t[1], t[2]);
-                }
-            });
-        if (eq7_only) {
-            pb_eq7 = f[0].image();
-            return;
-        }
-        for (int k = 0; k < kComp; ++k) pr.img[std::size_t(k)] = f[std::size_t(k)].image();
+    // gives the same image. `fill` adds one pixel's components to the `nfilm` films.
+    auto render_with = [&](const Renderer& r, const std::string& what, int nfilm, auto&& fill) {
+        return wang18::render_rows(ex, "wang18 " + cs.name + what, cs.name + what, W, H, nfilm, 1,
+                                   [&](int y, std::span<gl::Film> film) {
+                                       for (int x = 0; x < W; ++x) {
+                                           gl::Rng rng = gl::Rng::from_key(seed, std::uint64_t(y) * W + x, 0x10000u);
+                                           const gl::Vec2f u = rng.uniform2<float>();
+                                           fill(r.radiance_components(
+                                                    camera.generate_ray(float(x) + u.x, float(y) + u.y), rng),
+                                                film, x, y);
+                                       }
+                                   });
     };
+    auto add = [](gl::Film& f, int x, int y, const gl::RGB& v) { f.add_rgb(x, y, v[0], v[1], v[2]); };
+    using Components = gl::PointBasedComponents<gl::RGB>;
     c0 = cpu_seconds();
-    render_pb(false);
+    {
+        const std::vector<gl::Film> f =
+            render_with(pb, " point-based", kComp, [&](const Components& c, std::span<gl::Film> film, int x, int y) {
+                add(film[0], x, y, c.single);
+                add(film[1], x, y, c.double_);
+                add(film[2], x, y, c.multiple);
+                add(film[3], x, y, c.bounced);
+                add(film[4], x, y, c.total());
+            });
+        for (int k = 0; k < kComp; ++k) pr.img[std::size_t(k)] = f[std::size_t(k)].image();
+    }
     res.cpu_pb = wang18::sum_over_ranks(ex, cpu_seconds() - c0);
     pr.cpu_samples = res.cpu_samples;
     pr.cpu_render = res.cpu_pb;
-    if (study) {
-        pb.set_ms_boundary_image(true);
-        render_pb(true);
-        pb.set_ms_boundary_image(false);
-    }
-    // The study's third variant: the same light samples with the diffusion far field (our
-    // addition): multiple + bounced and the total.
+    // The study's other variants on the same camera rays: Eq. 7 with the boundary image, and the
+    // diffusion far field (our addition; multiple + bounced and the total).
     gl::Image far_mb(W, H), far_total(W, H);
     if (study) {
+        pb.set_ms_boundary_image(true);
+        pb_eq7 = render_with(pb, " point-based (boundary image)", 1,
+                             [&](const Components& c, std::span<gl::Film> film, int x, int y) {
+                                 add(film[0], x, y, c.multiple);
+                             })[0]
+                     .image();
+        pb.set_ms_boundary_image(false);
         gl::PointBasedOptions<float> pf = po;
         pf.ms_far_field = gl::MsFarField::diffusion;
         gl::Rng frng = gl::Rng::from_key(seed, 0x5742u);
         const Renderer pbf(medium, eta, sphere, gl::sphere_surface_samples(sphere, n_surf),
                            gl::Light<float, gl::RGB>::quad_light(quad, gl::RGB(Le)), pf, frng, &table,
                            gl::sphere_surface_samples(sphere, po.bounce_samples));
-        const std::vector<gl::Film> f = wang18::render_rows(
-            ex, "wang18 " + cs.name + " point-based (far field)", cs.name + " point-based (far field)", W, H, 2, 1,
-            [&](int y, std::span<gl::Film> film) {
-                for (int x = 0; x < W; ++x) {
-                    gl::Rng rng = gl::Rng::from_key(seed, std::uint64_t(y) * W + x, 0x10000u);
-                    const gl::Vec2f u = rng.uniform2<float>();
-                    const auto c = pbf.radiance_components(camera.generate_ray(float(x) + u.x, float(y) + u.y), rng);
-                    const gl::RGB mb = c.multiple + c.bounced, t = c.total();
-                    film[0].add_rgb(x, y, mb[0], mb[1], mb[2]);
-                    film[1].add_rgb(x, y, t[0], t[1], t[2]);
-                }
+        const std::vector<gl::Film> f =
+            render_with(pbf, " point-based (far field)", 2, [&](const Components& c, std::span<gl::Film> film, int x, int y) {
+                add(film[0], x, y, c.multiple + c.bounced);
+                add(film[1], x, y, c.total());
             });
         far_mb = f[0].image();
         far_total = f[1].image();

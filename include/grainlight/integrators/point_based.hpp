@@ -827,13 +827,8 @@ public:
         const F rho = glm::length(rv - z * dv);
         // The direction lookup (acos, atan2) only where some channel is on the grid (the same
         // test as the table's corners; 0 elsewhere).
-        const MsTableGrid& g = msq_ ? msq_->grid() : ms_->grid();
         bool on_grid = false;
-        for (std::size_t c = 0; c < S::size && !on_grid; ++c) {
-            const F st = medium_.sigma_t()[c];
-            const double rr = double(rho * st), zz = double(z * st);
-            on_grid = rr >= 0 && rr <= g.rho_max && zz >= g.z_min && zz <= g.z_max;
-        }
+        for (std::size_t c = 0; c < S::size && !on_grid; ++c) on_grid = on_table_grid(c, rho, z);
         if (!on_grid) return m;
         const MsDirection dir = table_direction(rv, dv, to_cam);
         for (std::size_t c = 0; c < S::size; ++c) {
@@ -841,6 +836,14 @@ public:
             m[c] = F(table_eval(c, double(rho * st), double(z * st), dir)) * st * st * st;
         }
         return m;
+    }
+    /// True if (rho, z) (scene units) lies on the table's grid in channel c's mean free paths (the
+    /// test of ms_cell_corners: the table is 0 elsewhere).
+    [[nodiscard]] bool on_table_grid(std::size_t c, F rho, F z) const noexcept {
+        const MsTableGrid& g = msq_ ? msq_->grid() : ms_->grid();
+        const F st = medium_.sigma_t()[c];
+        const double rr = double(rho * st), zz = double(z * st);
+        return rr >= 0 && rr <= g.rho_max && zz >= g.z_min && zz <= g.z_max;
     }
     /// The table value (dense or compressed) of channel c at (rho, z) in mean free paths.
     [[nodiscard]] double table_eval(std::size_t c, double rho, double z, const MsDirection& dir) const noexcept {
@@ -861,13 +864,21 @@ public:
     /// alpha (the light after its first collision) at xv + delta coh dv, delta = g / sigma_t'.
     [[nodiscard]] F far_kernel(std::size_t c, const Vec3<F>& P, const Vec3<F>& xv, const Vec3<F>& dv, F coh,
                                const Vec3<F>& to_cam) const noexcept {
-        const Vec3<F> rr = P - (xv + (far_delta_[c] * coh) * dv);
+        Vec3<F> E;
+        const F phi = far_green(c, P, xv, dv, coh, E);
+        return medium_.sigma_s()[c] * inv_four_pi_v<F> * (phi + F(3) * far_g_[c] * glm::dot(E, to_cam));
+    }
+    /// The infinite-medium diffusion field of channel c at x per unit scattered power at xv
+    /// travelling along dv (coherence `coh`): the fluence phi = alpha e^{-k r} / (4 pi D r) of a
+    /// point source of power alpha at xv + delta coh dv (r at least half a grid cell), returned,
+    /// and its flux E = -D grad phi.
+    [[nodiscard]] F far_green(std::size_t c, const Vec3<F>& x, const Vec3<F>& xv, const Vec3<F>& dv, F coh,
+                              Vec3<F>& E) const noexcept {
+        const Vec3<F> rr = x - (xv + (far_delta_[c] * coh) * dv);
         const F r = std::max(glm::length(rr), far_soft_);
-        const F e = std::exp(-far_kappa_[c] * r);
-        const F a = medium_.albedo()[c] * inv_four_pi_v<F>;
-        const F phi = a * e / (far_D_[c] * r);
-        const F flux = a * e * (F(1) + far_kappa_[c] * r) / (r * r) * glm::dot(rr, to_cam) / r;
-        return medium_.sigma_s()[c] * inv_four_pi_v<F> * (phi + F(3) * far_g_[c] * flux);
+        const F e = medium_.albedo()[c] * inv_four_pi_v<F> * std::exp(-far_kappa_[c] * r);
+        E = (e * (F(1) + far_kappa_[c] * r) / (r * r * r)) * rr;
+        return e / (far_D_[c] * r);
     }
     /// The light the table's walks dropped beyond their escape radius and that would have come
     /// back to offset rv (emission density per unit scattered power, isotropic; channel c).
@@ -886,13 +897,10 @@ public:
         const Vec3<F> rv = P - xv;
         const F z = glm::dot(rv, dv);
         const F rho = glm::length(rv - z * dv);
-        const MsTableGrid& g = msq_ ? msq_->grid() : ms_->grid();
         std::array<bool, S::size> on{};
         bool any = false;
         for (std::size_t c = 0; c < S::size; ++c) {
-            const F st = medium_.sigma_t()[c];
-            const double rr = double(rho * st), zz = double(z * st);
-            on[c] = rr >= 0 && rr <= g.rho_max && zz >= g.z_min && zz <= g.z_max;
+            on[c] = on_table_grid(c, rho, z);
             any = any || on[c];
         }
         MsDirection dir;
@@ -1061,7 +1069,6 @@ private:
             far_kappa_[c] = std::sqrt(std::max(F(0), sa) / far_D_[c]);
             far_delta_[c] = gg[c] / stp;
             far_g_[c] = gg[c];
-            far_q_[c] = medium_.albedo()[c] * sig_s[c] * inv_four_pi_v<F> / far_D_[c];
             // The dropped particles' return (MsFarField doc): alpha / (4 pi D) e^{-k Re} sinh(k r)
             // / (r sinh(k Re)) with Re the escape radius plus the extrapolation length 2 D.
             far_re_[c] = opt_.ms_table_escape_radius / sig_t[c] + F(2) * far_D_[c];
@@ -1090,11 +1097,10 @@ private:
             std::array<double, S::size> phi{}, dn{};
             auto add = [&](const Vec3<F>& xv, const Vec3<F>& dv, F coh, const S& w) {
                 for (std::size_t c = 0; c < S::size; ++c) {
-                    const Vec3<F> rr = fc.s - (xv + (far_delta_[c] * coh) * dv);
-                    const F r = std::max(glm::length(rr), far_soft_);
-                    const F e = std::exp(-far_kappa_[c] * r) * (far_q_[c] * w[c]) / r;
-                    phi[c] += double(e);
-                    dn[c] -= double(e * (F(1) + far_kappa_[c] * r) * glm::dot(rr, fc.n) / (r * r));
+                    Vec3<F> E;
+                    const F q = sig_s[c] * w[c];  // scattered power
+                    phi[c] += double(q * far_green(c, fc.s, xv, dv, coh, E));
+                    dn[c] -= double(q * glm::dot(E, fc.n) / far_D_[c]);  // dphi/dn = -E . n / D
                 }
             };
             for (int set = 0; set < 2; ++set) {
@@ -1128,7 +1134,7 @@ private:
                 std::vector<F> g(faces.size());
                 for (std::size_t f = 0; f < faces.size(); ++f) g[f] = gdata[f][std::size_t(set)][c];
                 const F sa = std::max(F(0), sig_t[c] - sig_s[c]);
-                const std::vector<F> u = dgrid_->solve(far_D_[c], sa, A, {}, g, &far_info_[c]);
+                const std::vector<F> u = dgrid_->solve(far_D_[c], sa, A, {}, g);
                 dfield_[std::size_t(set)][c] = dgrid_->field(u, far_D_[c], A, g);
             }
         }
@@ -1521,9 +1527,7 @@ private:
     // Far field (MsFarField::diffusion).
     std::optional<DiffusionGrid<F>> dgrid_;
     std::array<std::array<typename DiffusionGrid<F>::Field, S::size>, 2> dfield_{};  ///< [source set][channel]
-    std::array<DiffusionSolveInfo, S::size> far_info_{};
     std::array<F, S::size> far_D_{}, far_kappa_{}, far_delta_{}, far_g_{};
-    std::array<F, S::size> far_q_{};  ///< alpha sigma_s / (4 pi D): the Green's function's factor per unit weight
     F far_soft_ = F(0);
     std::array<F, S::size> far_re_{}, far_ret_{};  ///< the table's escape radius + 2 D (scene units)
 };
